@@ -1,0 +1,66 @@
+"""Bezier curves of any order and their rational form (paper sections 8.4 and 8.5)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from math import comb
+
+import numpy as np
+
+from cgamesh.curves import CurveBasis
+
+
+def bernstein(order: int, alpha: np.ndarray) -> np.ndarray:
+    """Bernstein polynomials b_{i,N}(alpha), shape (A, N + 1)."""
+    alpha = np.asarray(alpha, dtype=np.float64)[:, None]
+    i = np.arange(order + 1)
+    coefficients = np.array([comb(order, k) for k in i], dtype=np.float64)
+    return coefficients * alpha**i * (1.0 - alpha) ** (order - i)
+
+
+def bernstein_derivative(order: int, alpha: np.ndarray) -> np.ndarray:
+    """d b_{i,N} / d alpha = N (b_{i-1,N-1} - b_{i,N-1}), shape (A, N + 1)."""
+    if order == 0:
+        return np.zeros((len(alpha), 1))
+    lower = bernstein(order - 1, alpha)
+    padded = np.pad(lower, ((0, 0), (1, 1)))
+    return order * (padded[:, :-1] - padded[:, 1:])
+
+
+@dataclass(frozen=True)
+class Bezier:
+    """One Bezier curve of order N = control_count - 1 over alpha in [0, 1]."""
+
+    control_count: int
+    segment_count: int = 1
+
+    def basis(self, t: np.ndarray) -> CurveBasis:
+        t = np.asarray(t, dtype=np.float64)
+        order = self.control_count - 1
+        indices = np.broadcast_to(np.arange(self.control_count), (len(t), self.control_count))
+        return CurveBasis(indices, bernstein(order, t), bernstein_derivative(order, t))
+
+
+@dataclass(frozen=True)
+class RationalBezier:
+    """C' = sum b_i w_i C_i / sum b_j w_j (eq. 32 for the derivative); weights > 0."""
+
+    weights: tuple[float, ...]
+    segment_count: int = 1
+
+    @property
+    def control_count(self) -> int:
+        return len(self.weights)
+
+    def basis(self, t: np.ndarray) -> CurveBasis:
+        t = np.asarray(t, dtype=np.float64)
+        order = self.control_count - 1
+        w = np.asarray(self.weights, dtype=np.float64)
+        b, db = bernstein(order, t), bernstein_derivative(order, t)
+        denominator = b @ w
+        d_denominator = db @ w
+        rational = b * w / denominator[:, None]
+        # Quotient rule of eq. 32, written per basis function.
+        d_rational = (db * w - rational * d_denominator[:, None]) / denominator[:, None]
+        indices = np.broadcast_to(np.arange(self.control_count), rational.shape)
+        return CurveBasis(indices, rational, d_rational)
