@@ -18,7 +18,7 @@ class SurfaceMesh:
     normals:   (V, 3) float64 unit vertex normals.
     uvs:       (V, 2) float64 texture coordinates, u around / across, v along, in [0, 1];
                v = 0 at the surface's start (exporters flip to their own V convention).
-    faces:     (F, 3) int64 vertex indices, counter-clockwise seen from the normals' side.
+    faces:     (F, 3) integer vertex indices (int32 from the meshers), counter-clockwise seen from the normals' side.
     name:      the surface's name from the scene file.
     double_sided: True for surfaces meant to be seen from both sides (ribbons).
     """

@@ -17,6 +17,8 @@ column and, for closed loops, its last ring repeat the first bit for bit.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from cgamesh import normals as normal_field
@@ -44,7 +46,8 @@ def transported_frames(normal: np.ndarray, closed: bool, t: np.ndarray) -> tuple
     steps = np.concatenate(
         [rotors.rotation_between(E3, normal[:1]), rotors.rotation_between(normal[:-1], normal[1:])]
     )
-    u = rotors.apply_to_euclidean(rotors.prefix_products(steps), np.broadcast_to(E1, normal.shape))
+    accumulated = rotors.prefix_products(steps, rotors.EUCLIDEAN_ROTOR_GRADES)
+    u = rotors.apply_to_euclidean(accumulated, np.broadcast_to(E1, normal.shape))
     u -= np.einsum("ki,ki->k", u, normal)[:, None] * normal
     u /= np.linalg.norm(u, axis=1, keepdims=True)
     v = np.cross(normal, u)
@@ -56,56 +59,132 @@ def transported_frames(normal: np.ndarray, closed: bool, t: np.ndarray) -> tuple
     return u, v
 
 
-def _ring_normal_coefficients(rings: CircleRings, u: np.ndarray, v: np.ndarray):
-    """(zeta, rho) coefficients (K, 7, 2), velocity scale (K,), and sample points (K, 7, 3)."""
-    points, radial = normal_field.sample_points(rings.centre, rings.radius, u, v)
-    velocity = rings.velocity(points)
-    coefficients = normal_field.normal_coefficients(velocity, radial, rings.normal)
-    return coefficients, np.linalg.norm(velocity, axis=-1).max(axis=1), points
+@dataclass(frozen=True)
+class RingNormals:
+    """The normal field of each ring as trigonometric polynomials in theta.
+
+    frame: (K, 7, 2) coefficients of (zeta, rho); raw: (K, 7, 3) coefficients of N in world
+    axes; speed: (K,) the ring's largest velocity; samples: (K, 7, 3) points at the sample
+    angles; sample_normals: (K, 7, 3) N there.
+    """
+
+    frame: np.ndarray
+    raw: np.ndarray
+    speed: np.ndarray
+    samples: np.ndarray
+    sample_normals: np.ndarray
+
+    @classmethod
+    def of(cls, rings: CircleRings, u: np.ndarray, v: np.ndarray) -> "RingNormals":
+        points, radial = normal_field.sample_points(rings.centre, rings.radius, u, v)
+        velocity = rings.velocity(points)
+        zeta_rho = normal_field.frame_coordinates(velocity, radial, rings.normal)
+        sampled = normal_field.normal_samples(zeta_rho, radial, rings.normal)
+        speed = np.linalg.norm(velocity, axis=-1).max(axis=1)
+        return cls(normal_field.fit(zeta_rho), normal_field.fit(sampled), speed, points, sampled)
+
+    def replace_rings(self, which: np.ndarray, other: "RingNormals") -> "RingNormals":
+        """These normals with the rings ``which`` (bool (K,)) taken from ``other`` (one row each)."""
+        fields = {}
+        for name in ("frame", "raw", "speed", "sample_normals"):
+            mine = getattr(self, name).copy()
+            mine[which] = getattr(other, name)
+            fields[name] = mine
+        return RingNormals(samples=self.samples, **fields)
 
 
-def _fix_stationary_rings(surface, t, rings, u, coefficients, speed):
-    """Replace the normal coefficients of rings that do not move by those just past them."""
-    stationary = speed <= STATIONARY_FRACTION * rings.radius
+def _ring_normals(surface: EvolvedSurface, t: np.ndarray, rings: CircleRings, u: np.ndarray,
+                  v: np.ndarray) -> RingNormals:
+    """Normals of every ring; a ring that does not move takes the field from just past it."""
+    field = RingNormals.of(rings, u, v)
+    stationary = field.speed <= STATIONARY_FRACTION * rings.radius
     if not np.any(stationary):
-        return coefficients, speed
+        return field
     end = surface.segment_count
     nearby_t = np.where(t[stationary] + STATIONARY_OFFSET <= end, t[stationary] + STATIONARY_OFFSET,
                         t[stationary] - STATIONARY_OFFSET)
     nearby = CircleRings.from_projection(surface.sample(nearby_t), surface.frame)
     nearby_u = u[stationary] - np.einsum("ki,ki->k", u[stationary], nearby.normal)[:, None] * nearby.normal
     nearby_u /= np.linalg.norm(nearby_u, axis=1, keepdims=True)
-    nearby_coefficients, nearby_speed, _ = _ring_normal_coefficients(
-        nearby, nearby_u, np.cross(nearby.normal, nearby_u)
-    )
-    coefficients = coefficients.copy()
-    speed = speed.copy()
-    coefficients[stationary] = nearby_coefficients
-    speed[stationary] = nearby_speed
-    return coefficients, speed
+    return field.replace_rings(stationary, RingNormals.of(nearby, nearby_u, np.cross(nearby.normal, nearby_u)))
+
+
+def _continuous_signs(field: RingNormals, theta: np.ndarray, size: np.ndarray) -> np.ndarray:
+    """Signs (K, M) making the normal field continuous over the whole (t, theta) grid.
+
+    Only rings whose field can reverse between two columns are examined vertex by vertex:
+    elsewhere |N| stays above the most N can change in one column step. Consecutive rings
+    are then compared (at the seven sample angles, or at every column where a ring has a
+    reversal) and a ring is flipped when it disagrees with its predecessor.
+    """
+    rings, columns = size.shape
+    step = theta[1] - theta[0]
+    suspicious = size.min(axis=1) <= normal_field.derivative_bound(field.raw) * step
+    signs = np.ones((rings, columns if np.any(suspicious) else 1))
+    agreement = np.einsum("ksc,ksc->k", normal_field.unit_rows(field.sample_normals[:-1]),
+                          normal_field.unit_rows(field.sample_normals[1:]))
+    if np.any(suspicious):
+        near = np.flatnonzero(np.convolve(suspicious, [1, 1, 1], mode="same") > 0)
+        row_of = np.full(rings, -1)
+        row_of[near] = np.arange(len(near))
+        before = row_of[np.maximum(near - 1, 0)]
+        after = row_of[np.minimum(near + 1, rings - 1)]
+        before[before < 0] = np.flatnonzero(before < 0)
+        after[after < 0] = np.flatnonzero(after < 0)
+        values = _frame_values(field.frame[near], theta, field.speed[near])
+        signs[near] = normal_field.ring_signs(values, before, after)
+        # Pairs of rings next to a reversal are compared at every column.
+        unit = normal_field.unit_rows(values) * signs[near][..., None]
+        pairs = np.flatnonzero((row_of[:-1] >= 0) & (row_of[1:] >= 0))
+        agreement[pairs] = np.einsum("kmc,kmc->k", unit[row_of[pairs]], unit[row_of[pairs + 1]])
+    ring_parity = np.concatenate([[0], np.cumsum(agreement < 0.0)]) % 2
+    return signs * (1.0 - 2.0 * ring_parity)[:, None]
+
+
+def _frame_values(frame: np.ndarray, theta: np.ndarray, speed: np.ndarray) -> np.ndarray:
+    """(zeta, rho) (R, M, 2) at theta, zeros replaced by their limit d/dtheta along the circle."""
+    values = normal_field.expand(frame, normal_field.trig_basis(theta))
+    zero = np.hypot(values[..., 0], values[..., 1]) <= normal_field.ZERO_FRACTION * speed[:, None]
+    if np.any(zero):
+        ring, column = np.nonzero(zero)
+        values[ring, column] = np.einsum("za,zac->zc", normal_field.trig_basis_derivative(theta[column]),
+                                         frame[ring])
+    return values
 
 
 def grid_faces(rings: int, columns: int, signs: np.ndarray) -> np.ndarray:
-    """Triangles (2 (rings-1)(columns-1), 3) of a (rings, columns) vertex grid.
+    """Triangles (2 (rings-1)(columns-1), 3) int32 of a (rings, columns) vertex grid.
 
     Quad (k, j) splits into (k,j)(k,j+1)(k+1,j) and (k,j+1)(k+1,j+1)(k+1,j), both wound like
-    d/dtheta x d/dt. signs (rings, columns): where the normal field is flipped (the sum of a
-    triangle's three vertex signs is negative) the triangle's winding is reversed too.
+    d/dtheta x d/dt. signs (rings, columns), or broadcastable to it: where the normal field
+    is flipped (the sum of a triangle's three vertex signs is negative) the triangle's
+    winding is reversed too. The majority's winding is written directly; only the minority
+    is reordered afterwards.
     """
-    k, j = np.meshgrid(np.arange(rings - 1), np.arange(columns - 1), indexing="ij")
-    a = (k * columns + j).ravel()
-    b, c, d = a + 1, a + columns, a + columns + 1
-    faces = np.empty((2 * a.size, 3), dtype=np.int64)
-    faces[0::2] = np.stack([a, b, c], axis=1)
-    faces[1::2] = np.stack([b, d, c], axis=1)
-    flat = signs.ravel()
-    flipped = flat[faces].sum(axis=1) < 0.0
-    faces[flipped] = faces[flipped][:, [0, 2, 1]]
-    return faces
+    signs = np.broadcast_to(signs, (rings, columns))
+    here, right, below, across = signs[:-1, :-1], signs[:-1, 1:], signs[1:, :-1], signs[1:, 1:]
+    flipped = np.stack([here + right + below < 0.0, right + across + below < 0.0], axis=2)
+    majority_flipped = 2 * np.count_nonzero(flipped) > flipped.size
+    second, third = (2, 1) if majority_flipped else (1, 2)
+    corner = (np.arange(rings - 1, dtype=np.int32)[:, None] * columns
+              + np.arange(columns - 1, dtype=np.int32)[None, :])
+    faces = np.empty((rings - 1, columns - 1, 2, 3), dtype=np.int32)
+    faces[:, :, 0, 0] = corner
+    faces[:, :, 0, second] = corner + 1
+    faces[:, :, 0, third] = corner + columns
+    faces[:, :, 1, 0] = corner + 1
+    faces[:, :, 1, second] = corner + columns + 1
+    faces[:, :, 1, third] = corner + columns
+    minority = ~flipped if majority_flipped else flipped
+    if np.any(minority):
+        faces[minority] = faces[minority][:, [0, 2, 1]]
+    return faces.reshape(-1, 3)
 
 
 def drop_zero_area(positions: np.ndarray, faces: np.ndarray, suspects: np.ndarray) -> np.ndarray:
     """Remove triangles of zero area among those touching suspect vertices (V,) bool."""
+    if not np.any(suspects):
+        return faces
     candidates = np.flatnonzero(suspects[faces].any(axis=1))
     if candidates.size == 0:
         return faces
@@ -127,22 +206,31 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int, caps: 
     t = np.linspace(0.0, surface.segment_count, along)
     rings = CircleRings.from_projection(surface.sample(t), surface.frame)
     u, v = transported_frames(rings.normal, closed, t)
-
-    coefficients, speed, ring_samples = _ring_normal_coefficients(rings, u, v)
-    coefficients, speed = _fix_stationary_rings(surface, t, rings, u, coefficients, speed)
+    field = _ring_normals(surface, t, rings, u, v)
 
     theta = 2.0 * np.pi * np.arange(around + 1) / around
-    radial = np.cos(theta)[None, :, None] * u[:, None, :] + np.sin(theta)[None, :, None] * v[:, None, :]
-    positions = rings.centre[:, None, :] + rings.radius[:, None, None] * radial
+    circle_basis = np.stack([np.ones_like(theta), np.cos(theta), np.sin(theta)], axis=1)
+    placement = np.stack([rings.centre, rings.radius[:, None] * u, rings.radius[:, None] * v], axis=1)
+    positions = normal_field.expand(placement, circle_basis)
 
-    zeta_rho = normal_field.evaluate(coefficients, theta, speed)
-    size = np.hypot(zeta_rho[..., 0], zeta_rho[..., 1])
-    signs = normal_field.continuous_signs(zeta_rho)
-    # Outward on the whole: sum over vertices of n . (x - centre) = sum s zeta r / |.| > 0.
-    if np.sum(signs * zeta_rho[..., 0] / size * rings.radius[:, None]) < 0.0:
+    basis = normal_field.trig_basis(theta)
+    raw = normal_field.expand(field.raw, basis)
+    size = np.sqrt(raw[..., 0] ** 2 + raw[..., 1] ** 2 + raw[..., 2] ** 2)
+    zero = size <= normal_field.ZERO_FRACTION * field.speed[:, None]
+    if np.any(zero):  # the limit along the circle, N ~ (theta - theta0) dN/dtheta
+        ring, column = np.nonzero(zero)
+        raw[ring, column] = np.einsum("za,zac->zc", normal_field.trig_basis_derivative(theta[column]),
+                                      field.raw[ring])
+        size[ring, column] = np.linalg.norm(raw[ring, column], axis=-1)
+    signs = _continuous_signs(field, theta, size)
+    # Outward on the whole: sum over vertices of n . (x - centre) = sum s zeta r / |N| > 0.
+    zeta = normal_field.expand(field.frame[..., :1], basis)[..., 0]
+    zeta /= size
+    zeta *= signs
+    if zeta.sum(axis=1) @ rings.radius < 0.0:
         signs = -signs
-    scaled = zeta_rho * (signs / size)[..., None]
-    normals = scaled[..., 0:1] * radial - scaled[..., 1:2] * rings.normal[:, None, :]
+    raw *= (signs / size)[..., None]
+    normals = raw
 
     positions[:, -1] = positions[:, 0]
     normals[:, -1] = normals[:, 0]
@@ -154,13 +242,13 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int, caps: 
     faces = grid_faces(along, columns, signs)
     positions = positions.reshape(-1, 3)
     normals = normals.reshape(-1, 3)
-    suspects = (size <= NEAR_ZERO_FRACTION * speed[:, None]).ravel()
+    suspects = (size <= NEAR_ZERO_FRACTION * field.speed[:, None]).ravel()
     faces = drop_zero_area(positions, faces, suspects)
-    uvs = uv_map.grid_uvs(uv_map.along_coordinates(ring_samples), columns)
+    uvs = uv_map.grid_uvs(uv_map.along_coordinates(field.samples), columns)
 
     if caps:
         # Each cap faces away from the tube: against the direction its ring moves in.
-        leaving = np.sign(coefficients[[0, -1], 0, 0]) * np.array([-1.0, 1.0])
+        leaving = np.sign(field.frame[[0, -1], 0, 0]) * np.array([-1.0, 1.0])
         leaving[leaving == 0.0] = np.array([-1.0, 1.0])[leaving == 0.0]
         for ring, facing in zip((0, along - 1), leaving):
             rim = positions[ring * columns: ring * columns + around]

@@ -26,10 +26,7 @@ def along_coordinates(ring_samples: np.ndarray) -> np.ndarray:
 def grid_uvs(v: np.ndarray, columns: int) -> np.ndarray:
     """UVs (K * columns, 2) of a (K, columns) grid: u = j / (columns - 1), v per ring."""
     u = np.linspace(0.0, 1.0, columns)
-    uv = np.empty((len(v), columns, 2))
-    uv[..., 0] = u[None, :]
-    uv[..., 1] = v[:, None]
-    return uv.reshape(-1, 2)
+    return np.stack(np.broadcast_arrays(u[None, :], v[:, None]), axis=-1).reshape(-1, 2)
 
 
 def disc_uvs(theta: np.ndarray) -> np.ndarray:

@@ -1,10 +1,11 @@
 """Batched products of multivectors stored as (..., 32) float64 arrays.
 
-A product is evaluated as a sum of terms a[..., i] * b[..., j] * sign into output blade k.
-Only the terms between blades that can be non-zero are kept: callers name the grades
-their operands carry (a circle is grade 3, a rotor grades 0, 2, 4), and the term list for
-that pattern is built once and cached. So a circle times a circle costs 100 terms, not
-1024, with no per-element Python.
+A product is bilinear: with A and B the coefficients of the blades each operand can carry,
+the result is the outer product A B^T, flattened, times a fixed sign-and-placement matrix
+(one matrix product over the whole batch). Callers name the grades their operands carry (a
+circle is grade 3, a rotor grades 0, 2, 4), and the matrix for that pattern is built once
+and cached: a circle times a circle is a 100-column product, not 1024, with no
+per-element Python.
 """
 
 from __future__ import annotations
@@ -29,39 +30,40 @@ _SIGN_TABLES = {"geometric": GEOMETRIC_SIGN, "outer": OUTER_SIGN, "inner": INNER
 
 
 @lru_cache(maxsize=None)
-def _terms(kind: str, grades_a: tuple, grades_b: tuple, grades_out: tuple):
-    """Term list of a product restricted to operand and result grades.
+def _bilinear_map(kind: str, grades_a: tuple, grades_b: tuple, grades_out: tuple):
+    """The product restricted to operand and result grades, as a matrix.
 
-    Returns (ia, ib, signs, out_blades, group_starts): the terms sorted by output blade,
-    ``out_blades`` the distinct output blades and ``group_starts`` where each one's run of
-    terms begins (for ``np.add.reduceat``).
+    Returns (blades_a, blades_b, blades_out, matrix): with A = a[..., blades_a] and
+    B = b[..., blades_b], the result's blades_out coefficients are outer(A, B) @ matrix,
+    where outer(A, B) is flattened row-major to (..., len(blades_a) * len(blades_b)).
     """
     signs = _SIGN_TABLES[kind]
-    ia, ib = np.nonzero(
-        np.isin(GRADES, grades_a)[:, None]
-        & np.isin(GRADES, grades_b)[None, :]
-        & (signs != 0.0)
-        & np.isin(GRADES[PRODUCT_INDEX], grades_out)
-    )
-    k = PRODUCT_INDEX[ia, ib]
-    order = np.argsort(k, kind="stable")
-    ia, ib, k = ia[order], ib[order], k[order]
-    out_blades, group_starts = np.unique(k, return_index=True)
-    return ia, ib, signs[ia, ib], out_blades, group_starts
+    blades_a = np.flatnonzero(np.isin(GRADES, grades_a))
+    blades_b = np.flatnonzero(np.isin(GRADES, grades_b))
+    result = PRODUCT_INDEX[np.ix_(blades_a, blades_b)]
+    sign = signs[np.ix_(blades_a, blades_b)] * np.isin(GRADES[result], grades_out)
+    blades_out = np.unique(result[sign != 0.0])
+    column = np.searchsorted(blades_out, result)
+    matrix = np.zeros((blades_a.size * blades_b.size, max(blades_out.size, 1)))
+    rows = np.arange(matrix.shape[0])
+    keep = sign.ravel() != 0.0
+    matrix[rows[keep], column.ravel()[keep]] = sign.ravel()[keep]
+    return blades_a, blades_b, blades_out, matrix
 
 
 def _product(kind, a, b, grades_a, grades_b, grades_out):
-    ia, ib, signs, out_blades, starts = _terms(
+    blades_a, blades_b, blades_out, matrix = _bilinear_map(
         kind, tuple(sorted(grades_a)), tuple(sorted(grades_b)), tuple(sorted(grades_out))
     )
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
     shape = np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
     out = np.zeros(shape + (BLADE_COUNT,))
-    if ia.size:
-        terms = a[..., ia] * b[..., ib]
-        terms *= signs
-        out[..., out_blades] = np.add.reduceat(terms, starts, axis=-1)
+    if blades_out.size:
+        left = a[..., blades_a][..., :, None]
+        right = b[..., blades_b][..., None, :]
+        pairs = (left * right).reshape(shape + (blades_a.size * blades_b.size,))
+        out[..., blades_out] = pairs @ matrix
     return out
 
 

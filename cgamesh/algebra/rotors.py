@@ -18,6 +18,7 @@ from cgamesh.algebra.layout import BLADE_COUNT, blade_index, grade_indices
 _E12, _E13, _E23 = blade_index("e12"), blade_index("e13"), blade_index("e23")
 _VECTORS = grade_indices(1)
 _ROTOR_GRADES = (0, 2, 4)
+EUCLIDEAN_ROTOR_GRADES = (0, 2)
 _E0 = products.outer(N_INF, N_0, (1,), (1,))  # n_inf ^ n_0 (= e4 e5 = e45)
 
 
@@ -74,32 +75,33 @@ def trs_versor(centre: np.ndarray, rotor: np.ndarray, scale: np.ndarray) -> np.n
     return products.geometric(translator(centre), dilated, (0, 2), _ROTOR_GRADES, _ROTOR_GRADES)
 
 
-def renormalise(rotor: np.ndarray) -> np.ndarray:
+def renormalise(rotor: np.ndarray, grades: tuple[int, ...] = _ROTOR_GRADES) -> np.ndarray:
     """R / sqrt(<R ~R>_0), removing the rounding that products accumulate."""
-    norm_sq = products.geometric(rotor, products.reverse(rotor), _ROTOR_GRADES, _ROTOR_GRADES, (0,))[..., 0]
+    norm_sq = products.geometric(rotor, products.reverse(rotor), grades, grades, (0,))[..., 0]
     return rotor / np.sqrt(norm_sq)[..., None]
 
 
-def prefix_products(rotors: np.ndarray) -> np.ndarray:
+def prefix_products(rotors: np.ndarray, grades: tuple[int, ...] = _ROTOR_GRADES) -> np.ndarray:
     """Inclusive products P_k = R_k R_{k-1} ... R_0 of rotors (K, 32), later factors on the left.
 
     A log-depth scan (Hillis-Steele): about log2(K) batched products instead of K sequential
-    ones, and each result carries the rounding of only log2(K) products.
+    ones, and each result carries the rounding of only log2(K) products. ``grades``: the
+    grades the rotors and their products carry ((0, 2) for Euclidean rotations).
     """
     acc = np.array(rotors, dtype=np.float64)
     shift = 1
     while shift < len(acc):
-        acc[shift:] = products.geometric(acc[shift:], acc[:-shift], _ROTOR_GRADES, _ROTOR_GRADES, _ROTOR_GRADES)
-        acc = renormalise(acc)
+        acc[shift:] = products.geometric(acc[shift:], acc[:-shift], grades, grades, grades)
+        acc = renormalise(acc, grades)
         shift *= 2
     return acc
 
 
 def apply_to_euclidean(rotor: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """R x ~R for Euclidean rotation rotors (..., 32) and vectors (..., 3)."""
+    """R x ~R for Euclidean rotation rotors (..., 32) (grades 0, 2) and vectors (..., 3)."""
     moved = products.geometric(
-        products.geometric(rotor, vector(x), _ROTOR_GRADES, (1,), (1, 3)), products.reverse(rotor),
-        (1, 3), _ROTOR_GRADES, (1,),
+        products.geometric(rotor, vector(x), EUCLIDEAN_ROTOR_GRADES, (1,), (1, 3)), products.reverse(rotor),
+        (1, 3), EUCLIDEAN_ROTOR_GRADES, (1,),
     )
     return moved[..., EUCLIDEAN]
 
