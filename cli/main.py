@@ -1,81 +1,39 @@
-"""The ``cgamesh`` command: ``cgamesh SCENE.yaml -o OUT.glb``.
+"""The ``cgamesh`` command.
 
-Thin by design: it parses arguments, calls the package, prints one summary line, and turns
-any CgameshError into one line on stderr with exit status 2. No geometry lives here.
+    cgamesh SCENE.yaml -o OUT.glb [...]      build meshes and export them (cli/build.py)
+    cgamesh COMMAND ...                       one of the subcommands in SUBCOMMANDS
+
+Thin by design: each command module parses its arguments and calls the package; this module
+dispatches, and turns any CgameshError into one line on stderr with exit status 2. No geometry
+lives here, and nothing heavy is imported before a command needs it.
 """
 
 from __future__ import annotations
 
-import argparse
+import importlib
 import sys
-import time
-from pathlib import Path
 
-from cgamesh.errors import CgameshError, InvalidInputError
+from cgamesh.errors import CgameshError
 
 EXIT_USER_ERROR = 2
-WRITERS = (".glb",)
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {value}")
-    return value
-
-
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="cgamesh",
-        description="Mesh the CGA evolved surfaces of a scene file and export them.",
-    )
-    parser.add_argument("scene", help="the YAML scene file (format version 1)")
-    parser.add_argument("-o", "--output", required=True, help="output file: .glb")
-    parser.add_argument("--around", type=_positive_int, help="vertices around every circle (overrides the file)")
-    parser.add_argument("--along", type=_positive_int, help="rings along every surface (overrides the file)")
-    parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    return parser
-
-
-def run(args: argparse.Namespace) -> str:
-    """Build and write; returns the summary line."""
-    from cgamesh.export.gltf import write_glb
-    from cgamesh.pipeline import Resolution, mesh_scene
-    from cgamesh.progress import Progress
-    from cgamesh.scene import load_scene
-
-    output = Path(args.output)
-    if output.suffix.lower() not in WRITERS:
-        raise InvalidInputError(
-            f"{output}: unknown output format {output.suffix or '(no extension)'!r}; expected one of {', '.join(WRITERS)}"
-        )
-    if args.around is not None and args.around < 3:
-        raise InvalidInputError(f"--around must be >= 3 for circles, got {args.around}")
-    start = time.perf_counter()
-    scene = load_scene(args.scene)
-    with Progress(len(scene.surfaces), enabled=not args.quiet) as progress:
-        meshes = mesh_scene(scene, Resolution(args.around, args.along), progress=progress.advance)
-    written = write_glb(output, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit,
-                        source_units=scene.units)
-    seconds = time.perf_counter() - start
-    vertices = sum(mesh.vertex_count for mesh, _ in meshes)
-    triangles = sum(mesh.triangle_count for mesh, _ in meshes)
-    return (f"{output}: {len(meshes)} surface{'s' if len(meshes) != 1 else ''}, {vertices} vertices, "
-            f"{triangles} triangles, {seconds:.2f} s, {written} bytes")
+# subcommand name -> module of this package with build_parser() and run(args) -> str | None
+SUBCOMMANDS: dict[str, str] = {}
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    name = argv[0] if argv and argv[0] in SUBCOMMANDS else None
+    module = importlib.import_module(f"cgamesh_cli.{SUBCOMMANDS[name]}" if name else "cgamesh_cli.build")
+    args = module.build_parser().parse_args(argv[1:] if name else argv)
     try:
-        summary = run(args)
+        result = module.run(args)
     except CgameshError as error:
         print(f"cgamesh: error: {error}", file=sys.stderr)
         return EXIT_USER_ERROR
-    if not args.quiet:
-        print(summary)
+    if isinstance(result, int):
+        return result
+    if result and not getattr(args, "quiet", False):
+        print(result)
     return 0
 
 
