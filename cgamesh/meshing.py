@@ -196,14 +196,18 @@ def drop_zero_area(positions: np.ndarray, faces: np.ndarray, suspects: np.ndarra
     return np.delete(faces, candidates[degenerate], axis=0)
 
 
-def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int, caps: bool = False,
-                        closed: bool = False) -> SurfaceMesh:
-    """Triangulate an evolved circle surface on ``along`` rings of ``around`` vertices.
+def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None = None, caps: bool = False,
+                        closed: bool = False, t: np.ndarray | None = None) -> SurfaceMesh:
+    """Triangulate an evolved circle surface on rings of ``around`` vertices.
 
-    Each ring carries around + 1 vertices (the UV seam column repeats the first one).
+    The rings sit at the increasing parameters ``t`` (from 0 to the segment count), or at
+    ``along`` evenly spaced ones. Each ring carries around + 1 vertices (the UV seam column
+    repeats the first one).
     """
     surface.check_projection_exists()
-    t = np.linspace(0.0, surface.segment_count, along)
+    if t is None:
+        t = np.linspace(0.0, surface.segment_count, along)
+    along = len(t)
     rings = CircleRings.from_projection(surface.sample(t), surface.frame)
     u, v = transported_frames(rings.normal, closed, t)
     field = _ring_normals(surface, t, rings, u, v)
