@@ -24,6 +24,16 @@ class SurfaceMesh:
     double_sided: True for surfaces meant to be seen from both sides (ribbons).
     max_deviation: the measured largest distance of the mesh from its true surface over
                triangle interiors (file units), when it was measured (tolerance-driven meshes).
+
+    Optional, filled by meshers that know them exactly (None: exporters derive what they need):
+    tangents:   (V, 4) float64 unit tangents along +u, orthogonal to the normals, and w = +-1 with
+                the bitangent cross(normal, tangent) * w pointing along +v (glTF's TANGENT, in
+                this frame; v as stored here, before any exporter's V flip).
+    uv_lengths: (V, 2) float64 file-unit lengths that one unit of u and of v spans at each vertex
+                (a tube: its circumference averaged along it, and its length; a cap: its
+                diameter both ways): the natural-UV stage (uv.py) scales by them.
+    weld:       (V,) integer index of the first vertex at the bit-identical position (weld[i] <= i;
+                seams and cap rims repeat vertices): exporters that weld points use it.
     """
 
     name: str

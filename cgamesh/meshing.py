@@ -35,6 +35,9 @@ STATIONARY_FRACTION = 1e-9
 STATIONARY_OFFSET = 1e-6
 # Triangles next to vertices where the normal field vanishes are checked for zero area.
 NEAR_ZERO_FRACTION = 1e-6
+# Consecutive rings whose normals agree less than this (mean cosine below minus it) lie on
+# the two sides of a fold.
+FOLD_AGREEMENT = 0.9
 
 
 def transported_frames(normal: np.ndarray, closed: bool, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -93,6 +96,20 @@ class RingNormals:
         return RingNormals(samples=self.samples, **fields)
 
 
+def _nearby_normals(surface: EvolvedSurface, t: np.ndarray, u: np.ndarray) -> RingNormals:
+    """Normals of the rings at parameters t (R,), their phase carried from axes u (R, 3) nearby."""
+    rings = CircleRings.from_projection(surface.sample(t), surface.frame)
+    u = u - np.einsum("ki,ki->k", u, rings.normal)[:, None] * rings.normal
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    return RingNormals.of(rings, u, np.cross(rings.normal, u))
+
+
+def _step_inside(surface: EvolvedSurface, t: np.ndarray, sign: float) -> np.ndarray:
+    """t + sign * STATIONARY_OFFSET, or the other way where that would leave the curve."""
+    moved = t + sign * STATIONARY_OFFSET
+    return np.where((moved >= 0.0) & (moved <= surface.segment_count), moved, t - sign * STATIONARY_OFFSET)
+
+
 def _ring_normals(surface: EvolvedSurface, t: np.ndarray, rings: CircleRings, u: np.ndarray,
                   v: np.ndarray) -> RingNormals:
     """Normals of every ring; a ring that does not move takes the field from just past it."""
@@ -100,45 +117,53 @@ def _ring_normals(surface: EvolvedSurface, t: np.ndarray, rings: CircleRings, u:
     stationary = field.speed <= STATIONARY_FRACTION * rings.radius
     if not np.any(stationary):
         return field
-    end = surface.segment_count
-    nearby_t = np.where(t[stationary] + STATIONARY_OFFSET <= end, t[stationary] + STATIONARY_OFFSET,
-                        t[stationary] - STATIONARY_OFFSET)
-    nearby = CircleRings.from_projection(surface.sample(nearby_t), surface.frame)
-    nearby_u = u[stationary] - np.einsum("ki,ki->k", u[stationary], nearby.normal)[:, None] * nearby.normal
-    nearby_u /= np.linalg.norm(nearby_u, axis=1, keepdims=True)
-    return field.replace_rings(stationary, RingNormals.of(nearby, nearby_u, np.cross(nearby.normal, nearby_u)))
+    nearby = _nearby_normals(surface, _step_inside(surface, t[stationary], 1.0), u[stationary])
+    return field.replace_rings(stationary, nearby)
 
 
-def _continuous_signs(field: RingNormals, theta: np.ndarray, size: np.ndarray) -> np.ndarray:
-    """Signs (K, M) making the normal field continuous over the whole (t, theta) grid.
+def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, u: np.ndarray, field: RingNormals,
+                      theta: np.ndarray, size: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Signs (K, M) making the normal field continuous over the whole (t, theta) grid, and
+    which rings (K,) bool were examined vertex by vertex (their field may turn fast).
 
     Only rings whose field can reverse between two columns are examined vertex by vertex:
-    elsewhere |N| stays above the most N can change in one column step. Consecutive rings
-    are then compared (at the seven sample angles, or at every column where a ring has a
-    reversal) and a ring is flipped when it disagrees with its predecessor.
+    elsewhere |N| stays above the most N can change in one column step. A reversal counts
+    as a fold (and flips the sign after it) only if ``normal_field.fold_sines`` confirms it,
+    from the ring and the same ring a tiny step before and after. Consecutive rings are then
+    compared (at the seven sample angles, or at every column where a ring has a reversal) and
+    a ring is flipped when its normals are all but opposite to its predecessor's.
     """
     rings, columns = size.shape
     step = theta[1] - theta[0]
     suspicious = size.min(axis=1) <= normal_field.derivative_bound(field.raw) * step
     signs = np.ones((rings, columns if np.any(suspicious) else 1))
     agreement = np.einsum("ksc,ksc->k", normal_field.unit_rows(field.sample_normals[:-1]),
-                          normal_field.unit_rows(field.sample_normals[1:]))
+                          normal_field.unit_rows(field.sample_normals[1:])) / field.sample_normals.shape[1]
     if np.any(suspicious):
-        near = np.flatnonzero(np.convolve(suspicious, [1, 1, 1], mode="same") > 0)
+        near = np.flatnonzero(suspicious)
+        values = _frame_values(field.frame[near], theta, field.speed[near])
+        folds = normal_field.reversals(values)
+        if np.any(folds):
+            row, column = np.nonzero(folds)
+            ring = near[row]
+            before_t = np.maximum(t[ring] - STATIONARY_OFFSET, 0.0)
+            after_t = np.minimum(t[ring] + STATIONARY_OFFSET, surface.segment_count)
+            before, after = _nearby_normals(surface, before_t, u[ring]), _nearby_normals(surface, after_t, u[ring])
+            sines = normal_field.fold_sines(field.frame[ring], before.frame, after.frame, after_t - before_t,
+                                            theta[column], theta[column + 1])
+            folds[row, column] = sines <= normal_field.FOLD_SINE
+        signs[near] = normal_field.ring_signs(folds)
+        # Pairs of rings next to a reversal are compared at every column.
         row_of = np.full(rings, -1)
         row_of[near] = np.arange(len(near))
-        before = row_of[np.maximum(near - 1, 0)]
-        after = row_of[np.minimum(near + 1, rings - 1)]
-        before[before < 0] = np.flatnonzero(before < 0)
-        after[after < 0] = np.flatnonzero(after < 0)
-        values = _frame_values(field.frame[near], theta, field.speed[near])
-        signs[near] = normal_field.ring_signs(values, before, after)
-        # Pairs of rings next to a reversal are compared at every column.
         unit = normal_field.unit_rows(values) * signs[near][..., None]
         pairs = np.flatnonzero((row_of[:-1] >= 0) & (row_of[1:] >= 0))
-        agreement[pairs] = np.einsum("kmc,kmc->k", unit[row_of[pairs]], unit[row_of[pairs + 1]])
-    ring_parity = np.concatenate([[0], np.cumsum(agreement < 0.0)]) % 2
-    return signs * (1.0 - 2.0 * ring_parity)[:, None]
+        agreement[pairs] = np.einsum("kmc,kmc->k", unit[row_of[pairs]], unit[row_of[pairs + 1]]) / columns
+    # A fold between two rings reverses the field along a line: the rings' normals are then
+    # all but opposite. A crease (a joint of a linear or C0 spline) turns them by less, and the
+    # field there is simply discontinuous: no flip.
+    ring_parity = np.concatenate([[0], np.cumsum(agreement < -FOLD_AGREEMENT)]) % 2
+    return signs * (1.0 - 2.0 * ring_parity)[:, None], suspicious
 
 
 def _frame_values(frame: np.ndarray, theta: np.ndarray, speed: np.ndarray) -> np.ndarray:
@@ -179,6 +204,25 @@ def grid_faces(rings: int, columns: int, signs: np.ndarray) -> np.ndarray:
     if np.any(minority):
         faces[minority] = faces[minority][:, [0, 2, 1]]
     return faces.reshape(-1, 3)
+
+
+def orient_by_geometry(faces: np.ndarray, positions: np.ndarray, normals: np.ndarray,
+                       which: np.ndarray) -> np.ndarray:
+    """Wind the triangles ``which`` (F,) bool counter-clockwise seen from their vertex normals.
+
+    A triangle straddling a fold spans two sheets of the parametrisation, and no vote of its
+    vertices' signs tells its winding; its own geometric normal against the sum of its vertex
+    normals does.
+    """
+    chosen = np.flatnonzero(which)
+    if chosen.size == 0:
+        return faces
+    corners = positions[faces[chosen]]
+    geometric = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    against = np.einsum("ti,ti->t", geometric, normals[faces[chosen]].sum(axis=1)) < 0.0
+    faces = faces.copy()
+    faces[chosen[against]] = faces[chosen[against]][:, [0, 2, 1]]
+    return faces
 
 
 def drop_zero_area(positions: np.ndarray, faces: np.ndarray, suspects: np.ndarray) -> np.ndarray:
@@ -226,7 +270,7 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
         raw[ring, column] = np.einsum("za,zac->zc", normal_field.trig_basis_derivative(theta[column]),
                                       field.raw[ring])
         size[ring, column] = np.linalg.norm(raw[ring, column], axis=-1)
-    signs = _continuous_signs(field, theta, size)
+    signs, turning = _continuous_signs(surface, t, u, field, theta, size)
     # Outward on the whole: sum over vertices of n . (x - centre) = sum s zeta r / |N| > 0.
     zeta = normal_field.expand(field.frame[..., :1], basis)[..., 0]
     zeta /= size
@@ -235,36 +279,73 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
         signs = -signs
     raw *= (signs / size)[..., None]
     normals = raw
+    # Tangent along +u: the circle's own tangent n x e_r = d x / d theta. The normal is
+    # signs * (n x e_r) x x' / |.|, so (normal x tangent) . d x / d t has the sign of ``signs``:
+    # w = signs makes the bitangent point along +v (v grows with t).
+    circle_tangent = normal_field.expand(np.stack([u, v], axis=1),
+                                         np.stack([-np.sin(theta), np.cos(theta)], axis=1))
+    tangents = np.concatenate([circle_tangent, np.broadcast_to(signs, size.shape)[..., None]], axis=-1)
 
     positions[:, -1] = positions[:, 0]
     normals[:, -1] = normals[:, 0]
+    tangents[:, -1] = tangents[:, 0]
     if closed:
         positions[-1] = positions[0]
         normals[-1] = normals[0]
+        tangents[-1] = tangents[0]
 
     columns = around + 1
     faces = grid_faces(along, columns, signs)
     positions = positions.reshape(-1, 3)
     normals = normals.reshape(-1, 3)
+    if np.any(turning):
+        # Next to a fold or a pinch point the vertex normals of one triangle may differ
+        # widely: such triangles are wound by their own geometry.
+        strip = turning[:-1] | turning[1:]
+        faces = orient_by_geometry(faces, positions, normals, np.repeat(strip, 2 * around))
+    tangents = tangents.reshape(-1, 4)
     suspects = (size <= NEAR_ZERO_FRACTION * field.speed[:, None]).ravel()
     faces = drop_zero_area(positions, faces, suspects)
-    uvs = uv_map.grid_uvs(uv_map.along_coordinates(field.samples), columns)
+    travelled = uv_map.along_lengths(field.samples)
+    uvs = uv_map.grid_uvs(uv_map.normalised(travelled), columns)
+    circumference = uv_map.mean_along(2.0 * np.pi * rings.radius, travelled)
+    uv_lengths = np.empty((len(positions), 2))
+    uv_lengths[:, 0] = circumference
+    uv_lengths[:, 1] = travelled[-1] if travelled[-1] > 0.0 else circumference
+    weld = _grid_weld(along, around, closed)
 
     if caps:
         # Each cap faces away from the tube: against the direction its ring moves in.
         leaving = np.sign(field.frame[[0, -1], 0, 0]) * np.array([-1.0, 1.0])
         leaving[leaving == 0.0] = np.array([-1.0, 1.0])[leaving == 0.0]
+        parts = [positions, normals, uvs, faces, tangents, uv_lengths, weld]
         for ring, facing in zip((0, along - 1), leaving):
-            rim = positions[ring * columns: ring * columns + around]
-            positions, normals, uvs, faces = _add_cap(
-                positions, normals, uvs, faces, rings, ring, rim, theta[:-1], facing
-            )
-    return SurfaceMesh(name=surface.name, positions=positions, normals=normals, uvs=uvs, faces=faces)
+            parts = _add_cap(*parts, rings, u, ring, columns, around, theta[:-1], facing)
+        positions, normals, uvs, faces, tangents, uv_lengths, weld = parts
+    return SurfaceMesh(name=surface.name, positions=positions, normals=normals, uvs=uvs, faces=faces,
+                       tangents=tangents, uv_lengths=uv_lengths, weld=weld)
 
 
-def _add_cap(positions, normals, uvs, faces, rings, ring, rim, theta, facing):
-    """Append a flat disc closing ring ``ring``; facing = +1 along the circle's normal, -1 against."""
-    around = len(rim)
+def _grid_weld(along: int, around: int, closed: bool) -> np.ndarray:
+    """weld (along * (around + 1),): the seam column onto column 0, a closed loop's last ring onto ring 0."""
+    columns = around + 1
+    grid = np.arange(along * columns, dtype=np.int64).reshape(along, columns)
+    grid[:, -1] = grid[:, 0]
+    if closed:
+        grid[-1] = grid[0]
+    return grid.ravel()
+
+
+def _add_cap(positions, normals, uvs, faces, tangents, uv_lengths, weld, rings, u, ring, columns,
+             around, theta, facing):
+    """Append a flat disc closing ring ``ring``; facing = +1 along the circle's normal, -1 against.
+
+    Its rim repeats the ring's vertices (welded onto them). UVs map the disc onto [0, 1]^2 with
+    u along facing * (the ring's axis u) and v along n x u, so the UVs wind counter-clockwise
+    seen from the cap's normal facing * n; the tangent is facing * u, with w = +1.
+    """
+    first = ring * columns
+    rim = positions[first: first + around]
     start = len(positions)
     cap_normal = facing * rings.normal[ring]
     cap_positions = np.vstack([rim, rings.centre[ring][None]])
@@ -273,9 +354,13 @@ def _add_cap(positions, normals, uvs, faces, rings, ring, rim, theta, facing):
     fan = np.stack([np.full(around, centre), start + j, start + (j + 1) % around], axis=1)
     if facing < 0:  # rim points run counter-clockwise about the circle's normal
         fan = fan[:, [0, 2, 1]]
+    count = around + 1
     return (
         np.vstack([positions, cap_positions]),
         np.vstack([normals, np.broadcast_to(cap_normal, cap_positions.shape)]),
-        np.vstack([uvs, uv_map.disc_uvs(theta)]),
-        np.vstack([faces, fan]),
+        np.vstack([uvs, uv_map.disc_uvs(theta, mirrored=facing < 0)]),
+        np.vstack([faces, fan.astype(faces.dtype)]),
+        np.vstack([tangents, np.broadcast_to(np.append(facing * u[ring], 1.0), (count, 4))]),
+        np.vstack([uv_lengths, np.full((count, 2), 2.0 * rings.radius[ring])]),
+        np.concatenate([weld, weld[first: first + around], [centre]]),
     )

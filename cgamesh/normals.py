@@ -28,8 +28,8 @@ SAMPLE_ANGLES = 2.0 * np.pi * np.arange(TERMS) / TERMS
 # Below this fraction of the ring's largest velocity, N is treated as zero.
 ZERO_FRACTION = 1e-8
 # A reversal of (zeta, rho) is a fold when the sine of the angle between its derivatives
-# along theta and along t is below this (exactly 0 on a fold, order 1 at a pinch point).
-FOLD_SINE = 0.25
+# along theta and along t, where it comes closest to zero, is below this (0 on a fold).
+FOLD_SINE = 1e-2
 
 
 def trig_basis(theta: np.ndarray) -> np.ndarray:
@@ -99,27 +99,33 @@ def derivative_bound(coefficients: np.ndarray) -> np.ndarray:
     return np.linalg.norm(coefficients, axis=-1) @ _FREQUENCY
 
 
-def _fold_crossings(values: np.ndarray, candidates: np.ndarray, before: np.ndarray,
-                    after: np.ndarray) -> np.ndarray:
-    """Which sign reversals between columns j and j+1 of a ring cross a fold (R, M-1) bool.
+def fold_sines(at: np.ndarray, before: np.ndarray, after: np.ndarray, dt: np.ndarray,
+               low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """How far from a fold each reversal of (zeta, rho) along a ring is: the sine (Z,) between
+    the field's derivatives along theta and along t where it comes closest to zero.
 
-    values (R, M, 2); before/after (R,): the rows holding each row's neighbouring rings.
-    Where the surface folds back, (zeta, rho) = lambda d with lambda changing sign along a
-    curve: its derivatives across and along the rings are both parallel to d, so the
-    Jacobian of (zeta, rho) over (t, theta) is singular there. A ring passing close by an
-    isolated zero (a pinch point of the surface, where the field only turns quickly) shows
-    the same reversal between two samples, but there the Jacobian is regular and the raw
-    field is the continuous one: such reversals are not folds.
+    at, before, after: (Z, 7, 2) coefficients of the ring with the reversal and of the rings a
+    small step dt (Z,) before and after it (carried by the same TRS stepping); low, high (Z,):
+    the two columns' angles. Where the surface folds back, (zeta, rho) = lambda d with lambda
+    changing sign along a curve, so both derivatives are parallel to d there: the sine is 0.
+    A ring passing near an isolated zero (a pinch point, where the field only turns quickly)
+    shows the same reversal between two columns, but the Jacobian there is regular.
     """
-    row, column = np.nonzero(candidates)
-    d_theta = values[row, column + 1] - values[row, column]
-    mid = 0.5 * (values[:, :-1] + values[:, 1:])
-    d_alpha = mid[after[row], column] - mid[before[row], column]
-    det = d_theta[:, 0] * d_alpha[:, 1] - d_theta[:, 1] * d_alpha[:, 0]
-    scale = np.maximum(np.einsum("zc,zc->z", d_theta, d_theta), np.einsum("zc,zc->z", d_alpha, d_alpha))
-    folds = np.zeros_like(candidates)
-    folds[row, column] = np.abs(det) <= FOLD_SINE * scale
-    return folds
+    fraction = np.linspace(0.0, 1.0, 33)
+    angles = low[:, None] + fraction[None, :] * (high - low)[:, None]  # (Z, 33)
+    values = np.einsum("zsa,zac->zsc", trig_basis(angles.ravel()).reshape(angles.shape + (TERMS,)), at)
+    closest = angles[np.arange(len(angles)), np.argmin(np.einsum("zsc,zsc->zs", values, values), axis=1)]
+    for _ in range(4):  # Gauss-Newton on |v(theta)|^2 down to the point nearest zero
+        value = np.einsum("za,zac->zc", trig_basis(closest), at)
+        slope = np.einsum("za,zac->zc", trig_basis_derivative(closest), at)
+        closest = np.clip(closest - np.einsum("zc,zc->z", value, slope)
+                          / np.maximum(np.einsum("zc,zc->z", slope, slope), np.finfo(float).tiny), low, high)
+    basis = trig_basis(closest)
+    along_theta = np.einsum("za,zac->zc", trig_basis_derivative(closest), at)
+    along_t = (np.einsum("za,zac->zc", basis, after) - np.einsum("za,zac->zc", basis, before)) / dt[:, None]
+    det = along_theta[:, 0] * along_t[:, 1] - along_theta[:, 1] * along_t[:, 0]
+    lengths = np.linalg.norm(along_theta, axis=1) * np.linalg.norm(along_t, axis=1)
+    return np.abs(det) / np.maximum(lengths, np.finfo(float).tiny)
 
 
 def unit_rows(values: np.ndarray) -> np.ndarray:
@@ -128,17 +134,17 @@ def unit_rows(values: np.ndarray) -> np.ndarray:
     return values / np.maximum(size, np.finfo(float).tiny)
 
 
-def ring_signs(values: np.ndarray, before: np.ndarray, after: np.ndarray) -> np.ndarray:
-    """Signs (R, M) in {-1, +1} making each ring's field continuous along theta.
+def reversals(values: np.ndarray) -> np.ndarray:
+    """(R, M-1) bool: where the field reverses between columns j and j+1 of each ring.
 
-    values: (R, M, 2) normal coordinates (zeta, rho) in each ring's frame; before/after (R,)
-    the rows of the neighbouring rings (for ``_fold_crossings``). Neighbouring normals of a
-    smooth field differ by small angles, so a negative dot product between neighbours that
-    is confirmed as a fold means the raw field passed through zero and reversed.
+    values: (R, M, 2) normal coordinates (zeta, rho). Neighbouring normals of a smooth field
+    differ by small angles, so a negative dot product means the raw field passed near zero.
     """
     unit = unit_rows(values)
-    reversed_ = np.einsum("kmc,kmc->km", unit[:, :-1], unit[:, 1:]) < 0.0
-    if np.any(reversed_):
-        reversed_ = _fold_crossings(values, reversed_, before, after)
-    parity = np.concatenate([np.zeros((len(values), 1), dtype=np.int64), np.cumsum(reversed_, axis=1)], axis=1)
+    return np.einsum("kmc,kmc->km", unit[:, :-1], unit[:, 1:]) < 0.0
+
+
+def ring_signs(folds: np.ndarray) -> np.ndarray:
+    """Signs (R, M) in {-1, +1} that flip after every fold crossing (R, M-1) along each ring."""
+    parity = np.concatenate([np.zeros((len(folds), 1), dtype=np.int64), np.cumsum(folds, axis=1)], axis=1)
     return 1.0 - 2.0 * (parity % 2)

@@ -13,10 +13,12 @@ import numpy as np
 
 from cgamesh.algebra import products
 from cgamesh.algebra.conformal import EUCLIDEAN, N_INF, down, up
-from cgamesh.errors import DegenerateGeometryError
+from cgamesh.errors import DegenerateGeometryError, NonFiniteInputError
 
 CIRCLE_GRADE = 3
 POINT_PAIR_GRADE = 2
+# End points closer than this fraction of their distance from the origin coincide (as the scene loader).
+COINCIDENT_RTOL = 1e-12
 _SCALAR = np.zeros(32)
 _SCALAR[0] = 1.0
 
@@ -49,7 +51,17 @@ def circle_through(a, b, d) -> np.ndarray:
 
 
 def point_pair(a, b) -> np.ndarray:
-    """Normalised point pairs up(a)^up(b) (..., 32)."""
+    """Normalised point pairs up(a)^up(b) (..., 32) from end points a, b (..., 3), finite and distinct."""
+    a, b = np.broadcast_arrays(np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64))
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+        raise NonFiniteInputError("point pair end points must be finite, got NaN or infinity")
+    gap = np.linalg.norm(a - b, axis=-1)
+    reach = np.maximum(np.linalg.norm(a, axis=-1), np.linalg.norm(b, axis=-1))
+    if np.any(gap <= COINCIDENT_RTOL * reach):
+        i = np.unravel_index(np.argmin(gap - COINCIDENT_RTOL * reach), np.shape(gap))
+        raise DegenerateGeometryError(
+            f"point pair end points must differ, got a = {a[i].tolist()} and b = {b[i].tolist()}"
+        )
     return normalise(products.outer(up(a), up(b), (1,), (1,)), POINT_PAIR_GRADE)
 
 

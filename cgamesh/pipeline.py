@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cgamesh import objects
+from cgamesh import uv as uv_map
 from cgamesh.curves.bezier import Bezier, RationalBezier
 from cgamesh.curves.kochanek_bartels import KochanekBartels
 from cgamesh.curves.linear import Linear
@@ -19,16 +20,19 @@ from cgamesh.frame import LocalFrame
 from cgamesh.material import Material
 from cgamesh.mesh import SurfaceMesh
 from cgamesh.meshing import mesh_circle_surface
+from cgamesh.ribbons import mesh_ribbon_surface
 from cgamesh.scene import Scene, SurfaceSpec
 from cgamesh.surface import EvolvedSurface
+from cgamesh.tessellation import mesh_to_tolerance
 
 
 @dataclass(frozen=True)
 class Resolution:
-    """Overrides of every surface's resolution from the command line (None keeps the file's)."""
+    """Overrides of every surface's resolution or tolerance from the command line (None keeps the file's)."""
 
     around: int | None = None
     along: int | None = None
+    tolerance: float | None = None
 
 
 def make_curve(spec: SurfaceSpec):
@@ -93,28 +97,58 @@ def _circle_blade(control, frame: LocalFrame) -> np.ndarray:
 
 
 def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution()) -> SurfaceMesh:
-    """The mesh of one surface, in the scene file's frame and units."""
-    around = resolution.around or spec.around
-    along = resolution.along or spec.along
-    if around is None or along is None:
-        raise InvalidInputError(
-            f"{spec.location}.tolerance: tolerance-driven tessellation is not available in this "
-            "version; give resolution: {around, along} (or --around and --along) instead"
-        )
-    if spec.type != "circles":
-        raise InvalidInputError(f"{spec.location}.type: point_pairs surfaces are not available in this version")
+    """The mesh of one surface, in the scene file's frame and units.
+
+    A tolerance (from the command line, or the file's unless the command line gives a full
+    resolution) asks for the fewest vertices within that distance of the true surface; the
+    mesh's ``max_deviation`` then holds the measured distance.
+    """
+    tolerance = _tolerance(spec, resolution)
+    if tolerance is None:
+        around = resolution.around or spec.around
+        along = resolution.along or spec.along
+        if spec.type == "circles" and around < 3:
+            raise InvalidInputError(f"{spec.location}: a circle needs at least 3 vertices around, got {around}")
     surface = build_surface(spec)
     try:
+        if spec.type == "point_pairs":  # caps are circles only (the scene loader refuses them here)
+            if tolerance is not None:
+                raise InvalidInputError("tolerance-driven tessellation of point_pairs surfaces is not "
+                                        "available in this version; give resolution: {around, along}")
+            return mesh_ribbon_surface(surface, around, along, closed=spec.closed)
+        if tolerance is not None:
+            return mesh_to_tolerance(surface, tolerance, caps=spec.caps, closed=spec.closed)
         return mesh_circle_surface(surface, around, along, caps=spec.caps, closed=spec.closed)
     except CgameshError as error:
         raise type(error)(f"{spec.location}: {error}") from None
 
 
+def _tolerance(spec: SurfaceSpec, resolution: Resolution) -> float | None:
+    """The tolerance this surface is meshed to, or None for a fixed resolution."""
+    if resolution.tolerance is not None:
+        return resolution.tolerance
+    if spec.tolerance is None:
+        return None
+    if resolution.around is not None and resolution.along is not None:
+        return None
+    if resolution.around is not None or resolution.along is not None:
+        raise InvalidInputError(
+            f"{spec.location}.tolerance: the file asks for a tolerance; give both --around and "
+            "--along to override it with a resolution"
+        )
+    return spec.tolerance
+
+
 def mesh_scene(scene: Scene, resolution: Resolution = Resolution(),
                progress=lambda label: None) -> list[tuple[SurfaceMesh, Material]]:
-    """Every surface's mesh with its material, in file order; ``progress(name)`` after each."""
+    """Every surface's mesh with its material, in file order; ``progress(name)`` after each.
+
+    The UVs are those of each surface's ``uv`` mode (uv.py: natural, none, or one xatlas atlas
+    shared by every surface that asks for it).
+    """
     meshes = []
     for spec in scene.surfaces:
-        meshes.append((mesh_surface(spec, resolution), spec.material))
+        meshes.append(mesh_surface(spec, resolution))
         progress(spec.name)
-    return meshes
+    meshes = uv_map.apply_uv_modes(meshes, [(spec.uv, spec.uv_scale) for spec in scene.surfaces])
+    return [(mesh, spec.material) for mesh, spec in zip(meshes, scene.surfaces)]

@@ -15,6 +15,8 @@ The derivative dS/dalpha follows by the chain rule through s, F, q, beta, g; the
 eq. 30 has a sign slip (d(1/f) = -f'/f^2), which this form avoids; tests compare it with
 central differences. The projection exists only where beta > 0 and g > 0; ``margin`` measures
 how far each sample is from that boundary, relative to the size of the interpolant.
+When Sigma has no 4-vector part for any interpolant of the controls (co-circular point pairs,
+paper section 7.3), ``project_scalar`` gives the same result without the 4-vector square root.
 """
 
 from __future__ import annotations
@@ -27,6 +29,8 @@ from cgamesh.algebra import products
 from cgamesh.algebra.layout import GRADES
 
 _FOUR_VECTOR = GRADES == 4
+# Controls whose symmetric 4-vector products stay below this (relative) take ``project_scalar``.
+FOUR_VECTOR_RTOL = 1e-10
 
 
 @dataclass(frozen=True)
@@ -79,4 +83,38 @@ def project(interpolant: np.ndarray, derivative: np.ndarray, grade: int, size: n
     )
     scale = np.square(size)
     margin = np.nan_to_num(np.minimum(beta, g) / scale, nan=-1.0)
+    return Projection(blades, derivatives, margin)
+
+
+def four_vector_free(controls: np.ndarray, grade: int, rtol: float = FOUR_VECTOR_RTOL) -> bool:
+    """Whether Sigma = -X' ~X' is a pure scalar for every interpolant X' of the controls (n, 32).
+
+    <Sigma>_4 = -sum_ij w_i w_j <X_i ~X_j>_4, so it vanishes for all weights exactly when
+    <X_i ~X_j + X_j ~X_i>_4 = 0 for every pair: for point pairs that is P_i ^ P_j = 0, all
+    end points on one circle (paper section 7.3). Relative to |X_i| |X_j| (coefficient norms).
+    """
+    g_ = (grade,)
+    cross = products.geometric(controls[:, None], products.reverse(controls)[None], g_, g_, (4,))
+    symmetric = np.abs(cross + np.swapaxes(cross, 0, 1)).max(axis=-1)
+    norms = np.linalg.norm(controls, axis=-1)
+    return bool(np.all(symmetric <= rtol * np.outer(norms, norms)))
+
+
+def project_scalar(interpolant: np.ndarray, derivative: np.ndarray, grade: int,
+                   size: np.ndarray) -> Projection:
+    """``project`` when Sigma = s is a scalar (``four_vector_free`` controls; paper section 7.3).
+
+    Then S = 1 / sqrt(s): X = X' / sqrt(s) and dX/dalpha = (dX' - X ds / (2 sqrt(s))) / sqrt(s),
+    with ds = -2 <dX' ~X'>_0; no square root of a 4-vector. The margin is s / size^2, as in
+    ``project`` (where beta = s and g = 2 s), and negative where X' squares to a negative number.
+    """
+    g_ = (grade,)
+    reversed_interpolant = products.reverse(interpolant)
+    s = -products.geometric(interpolant, reversed_interpolant, g_, g_, (0,))[:, 0]
+    ds = -2.0 * products.geometric(derivative, reversed_interpolant, g_, g_, (0,))[:, 0]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        root = np.sqrt(s)
+        blades = interpolant / root[:, None]
+        derivatives = (derivative - blades * (0.5 * ds / root)[:, None]) / root[:, None]
+    margin = np.nan_to_num(s / np.square(size), nan=-1.0)
     return Projection(blades, derivatives, margin)

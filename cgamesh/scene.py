@@ -24,6 +24,8 @@ import yaml
 from cgamesh.errors import (DegenerateGeometryError, InvalidInputError, NonFiniteInputError,
                             SceneFileError)
 from cgamesh.material import Material
+from cgamesh.scene_rendering import (RENDERING_KEYS, Attenuation, CameraSpec, LightSpec, ObjectSpec,
+                                      parse_rendering)
 
 Vec3 = tuple[float, float, float]
 
@@ -38,9 +40,10 @@ DEFAULT_ALONG = 128
 MAX_RESOLUTION = 1_000_000
 NAME_PATTERN = "[A-Za-z_][A-Za-z0-9_]*"
 
-_TOP_KEYS = ("cgamesh", "units", "up", "surfaces")
+_TOP_KEYS = ("cgamesh", "units", "up", "surfaces") + RENDERING_KEYS
 _SURFACE_KEYS = ("name", "type", "curve", "tension", "bias", "continuity", "closed", "align",
-                 "controls", "resolution", "tolerance", "caps", "material")
+                 "controls", "resolution", "tolerance", "caps", "material", "uv", "uv_scale")
+UV_MODES = ("natural", "xatlas", "none")
 _CIRCLE_KEYS = ("center", "normal", "radius", "through", "weight")
 _POINT_PAIR_KEYS = ("a", "b", "weight")
 _CIRCLE_FORMS = "a circle is {center, normal, radius} or {through: [A, B, D]}"
@@ -97,7 +100,8 @@ class SurfaceSpec:
 
     ``around``/``along`` are set (and ``tolerance`` is None) unless the file gives a tolerance
     (file units), in which case both are None. ``tension``/``bias``/``continuity`` are 0.0 for
-    every curve but kb.
+    every curve but kb. ``uv`` is one of UV_MODES; ``uv_scale`` (file units per texture repeat,
+    > 0) is given only with uv natural, None otherwise.
     """
 
     name: str
@@ -115,11 +119,17 @@ class SurfaceSpec:
     caps: bool
     material: Material
     location: Location
+    uv: str = "natural"
+    uv_scale: float | None = None
 
 
 @dataclass(frozen=True)
 class Scene:
-    """A whole scene file: format version, units and up axis of the file, its surfaces in order."""
+    """A whole scene file: format version, units and up axis of the file, its surfaces in order.
+
+    The rendering keys (cgamesh.scene_rendering) are optional: ``camera`` None and ``lights``
+    None when not given (the renderer then frames and lights the scene itself).
+    """
 
     path: str
     version: int
@@ -127,6 +137,12 @@ class Scene:
     meters_per_unit: float
     up: str
     surfaces: tuple[SurfaceSpec, ...]
+    camera: CameraSpec | None = None
+    lights: tuple[LightSpec, ...] | None = None
+    objects: tuple[ObjectSpec, ...] = ()
+    background: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    max_depth: int = 2
+    attenuation: Attenuation = Attenuation()
 
 
 def load_scene(path: str | os.PathLike) -> Scene:
@@ -169,7 +185,10 @@ def parse_scene(text: str, path: str = "<string>") -> Scene:
     names_taken: dict[str, Location] = {}
     surfaces = tuple(_surface(r, item, f"surfaces[{i}]", names_taken)
                      for i, item in enumerate(items))
-    return Scene(path, version, units, METERS_PER_UNIT[units], up, surfaces)
+    rendering = parse_rendering(r, entries, up)
+    return Scene(path, version, units, METERS_PER_UNIT[units], up, surfaces, rendering.camera,
+                 rendering.lights, rendering.objects, rendering.background, rendering.max_depth,
+                 rendering.attenuation)
 
 
 # --- sections ----------------------------------------------------------------------------------
@@ -212,8 +231,18 @@ def _surface(r: _Reader, node: yaml.Node, path: str,
     controls = _controls(r, controls_node, f"{path}.controls", kind, curve, closed)
     around, along, tolerance = _resolution(r, entries, path, kind)
     material = _material(r, entries, path)
+    uv = r.optional(entries, "uv", path, "natural", r.choice, UV_MODES)
+    uv_scale = None
+    if "uv_scale" in entries:
+        scale_node = entries["uv_scale"]
+        uv_scale = r.number(scale_node, f"{path}.uv_scale")
+        if uv != "natural":
+            raise r.error(scale_node, f"{path}.uv_scale",
+                          f"must be given only with uv natural, got {uv_scale!r} with uv {uv}")
+        if uv_scale <= 0.0:
+            raise r.error(scale_node, f"{path}.uv_scale", f"must be > 0, got {uv_scale!r}")
     return SurfaceSpec(name, kind, curve, tension, bias, continuity, closed, align, controls,
-                       around, along, tolerance, caps, material, r.location(node, path))
+                       around, along, tolerance, caps, material, r.location(node, path), uv, uv_scale)
 
 
 def _kb_parameter(r: _Reader, entries: dict, key: str, path: str, curve: str) -> float:

@@ -10,6 +10,7 @@ dX/dt = X . (C dC/dt) of points carried along by the evolution (paper eqs. 19-20
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Protocol
 
 import numpy as np
@@ -20,13 +21,13 @@ from cgamesh.curves import CurveBasis
 from cgamesh.errors import DegenerateGeometryError
 from cgamesh.frame import LocalFrame
 from cgamesh.objects import circle_euclidean
-from cgamesh.projection import Projection, project
+from cgamesh.projection import Projection, four_vector_free, project, project_scalar
 
 # The projection is refused where min(beta, g) falls below this fraction of |C'|^2: there
 # S grows like 1/sqrt(margin) and the object heads for a line, a point or nothing at all.
 MIN_MARGIN = 1e-8
 # Samples per segment used to look for a vanishing projection between the mesh's rings.
-SCAN_SAMPLES_PER_SEGMENT = 512
+SCAN_SAMPLES_PER_SEGMENT = 128
 
 
 class Curve(Protocol):
@@ -49,10 +50,16 @@ class EvolvedSurface:
     def segment_count(self) -> int:
         return self.curve.segment_count
 
+    @cached_property
+    def four_vector_free(self) -> bool:
+        """Whether every interpolant's Sigma is a scalar (co-circular point pairs, paper section 7.3)."""
+        return four_vector_free(self.controls, self.grade)
+
     def _project(self, t: np.ndarray) -> Projection:
         basis = self.curve.basis(t)
         interpolant, derivative = basis.evaluate(self.controls)
-        return project(interpolant, derivative, self.grade, basis.weight_sum())
+        projector = project_scalar if self.four_vector_free else project
+        return projector(interpolant, derivative, self.grade, basis.weight_sum())
 
     def sample(self, t: np.ndarray) -> Projection:
         """Projected objects and d/d alpha at parameters t (A,) in [0, segment_count]."""
