@@ -1,14 +1,17 @@
-"""``cgamesh SCENE.yaml -o OUT.glb``: mesh every surface of a scene and export them."""
+"""``cgamesh SCENE.yaml -o OUT.glb [-o OUT.usdz ...]``: mesh every surface of a scene once and
+export it to every output, each in the format of its extension (cgamesh.export.registry)."""
 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
 from cgamesh.errors import InvalidInputError
+from cgamesh.export.registry import WRITERS, writer_for
 
-WRITERS = (".glb",)
+EXIT_QUALITY = 1  # --strict and a quality threshold broken
 
 
 def _whole_number(text: str) -> int:
@@ -21,39 +24,89 @@ def _whole_number(text: str) -> int:
     return value
 
 
+def _positive_number(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not value > 0.0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="cgamesh",
         description="Mesh the CGA evolved surfaces of a scene file and export them.",
     )
     parser.add_argument("scene", help="the YAML scene file (format version 1)")
-    parser.add_argument("-o", "--output", required=True, help="output file: .glb")
+    parser.add_argument("-o", "--output", required=True, action="append",
+                        help=f"output file, repeatable; its extension picks the format: {', '.join(WRITERS)}")
     parser.add_argument("--around", type=_whole_number, help="vertices around every circle (overrides the file)")
     parser.add_argument("--along", type=_whole_number, help="rings along every surface (overrides the file)")
+    parser.add_argument("--tolerance", type=_positive_number,
+                        help="largest distance of every mesh from its true surface, in file units "
+                             "(instead of a resolution; overrides the file)")
+    parser.add_argument("--tangents", action="store_true",
+                        help="glTF: write a TANGENT attribute (so normal maps work)")
+    parser.add_argument("--quantize", action="store_true",
+                        help="glTF: store positions, normals and UVs in 16 / 8 bits (KHR_mesh_quantization)")
+    parser.add_argument("--report", metavar="REPORT.json",
+                        help="also write the mesh-quality report (JSON) of the meshes built")
+    parser.add_argument("--strict", action="store_true",
+                        help="with --report: exit 1 when a quality threshold is broken")
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     return parser
 
 
 def run(args: argparse.Namespace) -> str:
-    """Build and write; returns the summary line."""
-    from cgamesh.export.gltf import write_glb
+    """Build and write every output; returns the summary lines (one per output), or the exit
+    status 1 after printing them when --strict finds a quality threshold broken."""
+    from cgamesh.export.registry import write
     from cgamesh.pipeline import Resolution, mesh_scene
     from cgamesh.progress import Progress
     from cgamesh.scene import load_scene
 
-    output = Path(args.output)
-    if output.suffix.lower() not in WRITERS:
-        raise InvalidInputError(
-            f"{output}: unknown output format {output.suffix or '(no extension)'!r}; expected one of {', '.join(WRITERS)}"
-        )
+    outputs = [Path(o) for o in args.output]
+    for output in outputs:  # refused before any meshing: unknown formats, missing folders
+        writer_for(output)
+        if not output.parent.is_dir():
+            raise InvalidInputError(f"cannot write {output}: directory {output.parent} does not exist")
+    if args.report is not None and not Path(args.report).parent.is_dir():
+        raise InvalidInputError(f"cannot write {args.report}: directory {Path(args.report).parent} does not exist")
+    if args.strict and args.report is None:
+        raise InvalidInputError("--strict needs --report REPORT.json")
+    if args.tolerance is not None and (args.around is not None or args.along is not None):
+        raise InvalidInputError("--tolerance cannot be combined with --around or --along")
     start = time.perf_counter()
     scene = load_scene(args.scene)
     with Progress(len(scene.surfaces), enabled=not args.quiet) as progress:
-        meshes = mesh_scene(scene, Resolution(args.around, args.along), progress=progress.advance)
-    written = write_glb(output, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit,
-                        source_units=scene.units)
+        meshes = mesh_scene(scene, Resolution(args.around, args.along, args.tolerance), progress=progress.advance)
+    written = [write(output, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit, source_units=scene.units,
+                     tangents=args.tangents, quantize=args.quantize) for output in outputs]
     seconds = time.perf_counter() - start
+    failures = _write_report(args.report, [mesh for mesh, _ in meshes], args.scene) if args.report else []
     vertices = sum(mesh.vertex_count for mesh, _ in meshes)
     triangles = sum(mesh.triangle_count for mesh, _ in meshes)
-    return (f"{output}: {len(meshes)} surface{'s' if len(meshes) != 1 else ''}, {vertices} vertices, "
-            f"{triangles} triangles, {seconds:.2f} s, {written} bytes")
+    deviations = [mesh.max_deviation for mesh, _ in meshes if mesh.max_deviation is not None]
+    deviation = f", max deviation {max(deviations):.3g}" if deviations else ""
+    summary = "\n".join(
+        f"{output}: {len(meshes)} surface{'s' if len(meshes) != 1 else ''}, {vertices} vertices, "
+        f"{triangles} triangles{deviation}, {seconds:.2f} s, {size} bytes" for output, size in zip(outputs, written))
+    if args.strict and failures:
+        if not args.quiet:
+            print(summary)
+        print("cgamesh: quality: " + "; ".join(failures), file=sys.stderr)
+        return EXIT_QUALITY
+    return summary
+
+
+def _write_report(path: str, meshes, source: str) -> list[str]:
+    """Write the quality report of ``meshes`` as JSON at ``path`` (atomically); its failures."""
+    from cgamesh.export.atomic import atomic_write
+    from cgamesh.quality import report
+
+    result = report(meshes, str(source))
+    with atomic_write(path) as f:
+        f.write(result.to_json().encode() + b"\n")
+    return result.failures()

@@ -1,7 +1,11 @@
 """The ``cgamesh`` command.
 
     cgamesh SCENE.yaml -o OUT.glb [...]      build meshes and export them (cli/build.py)
-    cgamesh COMMAND ...                       one of the subcommands in SUBCOMMANDS
+    cgamesh COMMAND ...                       one of the subcommands in SUBCOMMANDS:
+    cgamesh check FILE [...]                  mesh-quality report of a scene or exported file (cli/check.py)
+    cgamesh view SCENE.yaml -o PAGE.html      a self-contained viewer page (cli/view.py)
+    cgamesh render SCENE.yaml -o IMAGE.png    ray trace the analytic surfaces (cli/render.py)
+    cgamesh verify SCENE.yaml MESH.glb        mesh against the ray tracer (cli/verify.py)
 
 Thin by design: each command module parses its arguments and calls the package; this module
 dispatches, and turns any CgameshError into one line on stderr with exit status 2. No geometry
@@ -17,7 +21,7 @@ from cgamesh.errors import CgameshError
 
 EXIT_USER_ERROR = 2
 # subcommand name -> module of this package with build_parser() and run(args) -> str | None
-SUBCOMMANDS: dict[str, str] = {}
+SUBCOMMANDS: dict[str, str] = {"check": "check", "view": "view", "render": "render", "verify": "verify"}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -36,6 +36,19 @@ def validate_gltf(path: str | os.PathLike[str]) -> dict:
     return json.loads(result.stdout)
 
 
+def validate_many(paths) -> list[dict]:
+    """The validator's reports on several files, from one node process (faster than one each)."""
+    paths = [os.fspath(p) for p in paths]
+    if len(paths) == 1:
+        return [validate_gltf(paths[0])]
+    result = subprocess.run(
+        ["node", str(SCRIPT), *paths], capture_output=True, text=True, timeout=600, check=False
+    )
+    if result.returncode != 0:
+        raise RuntimeError(f"glTF-Validator failed (exit {result.returncode}): {result.stderr.strip()}")
+    return json.loads(result.stdout)
+
+
 def issues_text(report: dict) -> str:
     """Every issue of a report, one per line, for an assertion message."""
     issues = report["issues"]

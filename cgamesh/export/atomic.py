@@ -50,12 +50,80 @@ def atomic_write(path: str | os.PathLike[str]) -> Iterator[BinaryIO]:
     _fsync_directory(target.parent)
 
 
-def _create_temp_beside(target: Path) -> tuple[Path, int]:
+@contextmanager
+def atomic_files(paths: list[str | os.PathLike[str]]) -> Iterator[list[BinaryIO]]:
+    """Like ``atomic_write`` for several files written together (a .gltf and its .bin).
+
+    Every file is written and fsynced under a temporary name first; only when all of them are
+    complete are they renamed into place, in the order given (put the file that references the
+    others last). On any failure no target is touched and every temporary file is removed.
+    """
+    targets = [Path(p) for p in paths]
+    temps: list[Path] = []
+    handles: list[BinaryIO] = []
+    try:
+        for target in targets:
+            tmp, fd = _create_temp_beside(target)
+            temps.append(tmp)
+            handles.append(os.fdopen(fd, "wb"))
+        yield handles
+        for f in handles:
+            f.flush()
+            os.fsync(f.fileno())
+            f.close()
+        for tmp, target in zip(temps, targets):
+            os.replace(tmp, target)
+    except BaseException as exc:
+        for f in handles:
+            try:
+                f.close()
+            except OSError:
+                pass
+        for tmp in temps:
+            _remove_quietly(tmp)
+        if isinstance(exc, OSError):
+            failed = next((t for t in targets if exc.filename and Path(exc.filename).name.startswith(f".{t.name}")),
+                          targets[0])
+            raise ExportError(f"cannot write {failed}: {_reason(exc, failed)}") from exc
+        raise
+    for directory in {t.parent for t in targets}:
+        _fsync_directory(directory)
+
+
+@contextmanager
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """A temporary path beside ``path``, with the same suffix, for libraries that write files
+    themselves (pxr picks the USD format by extension). When the block succeeds the file there
+    is fsynced and renamed onto ``path``; otherwise it is removed and ``path`` is untouched.
+    An ``OSError`` becomes a one-line ExportError; a block that wrote nothing is one too.
+    """
+    target = Path(path)
+    tmp, fd = _create_temp_beside(target, suffix=target.suffix)
+    os.close(fd)
+    try:
+        yield tmp
+        if not tmp.is_file() or tmp.stat().st_size == 0:
+            raise ExportError(f"cannot write {target}: nothing was written")
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        os.replace(tmp, target)
+    except BaseException as exc:
+        _remove_quietly(tmp)
+        if isinstance(exc, OSError):
+            raise ExportError(f"cannot write {target}: {_reason(exc, target)}") from exc
+        raise
+    _fsync_directory(target.parent)
+
+
+def _create_temp_beside(target: Path, suffix: str = "") -> tuple[Path, int]:
     """Create an empty, exclusively owned temporary file next to ``target``; (path, fd)."""
     directory = target.parent
     while True:
         # A hidden name so that directory listings and globs (*.glb) do not pick it up.
-        tmp = directory / f".{target.name}.{secrets.token_hex(6)}.tmp"
+        tmp = directory / f".{target.name}.{secrets.token_hex(6)}.tmp{suffix}"
         try:
             # os.open with mode 0o666 lets the umask decide the final permissions, as a plain
             # open() would (tempfile.mkstemp would force 0o600 on the finished file).

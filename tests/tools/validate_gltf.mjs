@@ -1,23 +1,24 @@
-// Validate one .glb / .gltf file with the Khronos glTF-Validator and print its JSON report.
+// Validate .glb / .gltf files with the Khronos glTF-Validator and print their JSON reports.
 //
-//   node validate_gltf.mjs path/to/file.glb
+//   node validate_gltf.mjs path/to/file.glb               one report (a JSON object)
+//   node validate_gltf.mjs a.glb b.gltf ...                one JSON array of reports, in order
 //
-// Exit code 0 when a report was produced (whatever it contains: the caller reads the counts),
-// 2 when the file could not be read or the validator could not parse it at all.
+// Exit code 0 when every report was produced (whatever they contain: the caller reads the
+// counts), 2 when a file could not be read or the validator could not parse it at all.
 import { readFile } from "node:fs/promises";
 import path from "node:path";
 import * as validator from "gltf-validator";
 
-const file = process.argv[2];
-if (!file) {
-  console.error("usage: node validate_gltf.mjs FILE.glb|FILE.gltf");
+const files = process.argv.slice(2);
+if (files.length === 0) {
+  console.error("usage: node validate_gltf.mjs FILE.glb|FILE.gltf [...]");
   process.exit(2);
 }
 
-const fullPath = path.resolve(file);
-try {
+async function validate(file) {
+  const fullPath = path.resolve(file);
   const bytes = new Uint8Array(await readFile(fullPath));
-  const report = await validator.validateBytes(bytes, {
+  return validator.validateBytes(bytes, {
     uri: path.basename(fullPath),
     maxIssues: 0, // unlimited: a test wants every issue, not the first few
     writeTimestamp: false,
@@ -25,8 +26,15 @@ try {
     externalResourceFunction: async (uri) =>
       new Uint8Array(await readFile(path.resolve(path.dirname(fullPath), decodeURIComponent(uri)))),
   });
-  process.stdout.write(JSON.stringify(report, null, 2) + "\n");
-} catch (error) {
-  console.error(`validate_gltf: ${fullPath}: ${error}`);
-  process.exit(2);
 }
+
+const reports = [];
+for (const file of files) {
+  try {
+    reports.push(await validate(file));
+  } catch (error) {
+    console.error(`validate_gltf: ${path.resolve(file)}: ${error}`);
+    process.exit(2);
+  }
+}
+process.stdout.write(JSON.stringify(files.length === 1 ? reports[0] : reports, null, 2) + "\n");

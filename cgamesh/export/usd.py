@@ -1,0 +1,248 @@
+"""USD export through usd-core (pxr): .usda (text), .usdc and .usd (binary crate), .usdz (package).
+
+USD's own vocabulary stays inside this file; pxr is imported only when a USD file is written.
+
+Stage: ``upAxis`` and ``metersPerUnit`` are the scene file's (USD carries them, so there is no
+axis swap and no scaling; the one exception is a z-up scene written as .usdz, whose ARKit rules
+require upAxis Y: see ``build_stage``); ``defaultPrim`` is one Xform named after the output file (``Scene``
+when its stem is not a valid prim name), holding one ``UsdGeom.Mesh`` per surface, named after
+it, and a ``Materials`` scope with one ``UsdPreviewSurface`` material per surface, bound to its
+mesh. The layer's customLayerData records the source units and up axis.
+
+Meshes: ``subdivisionScheme = "none"`` (otherwise renderers treat the cage as a subdivision
+surface and ignore the normals), right-handed orientation (triangles are counter-clockwise
+seen from their normals), ``extent``, and points stored as float32 relative to a
+``xformOp:translate`` (the double-precision centre of the bounding box), which keeps float32's
+precision for the surface's size. Points are welded: vertices the mesher repeated at a UV seam
+or a cap rim (``SurfaceMesh.weld``, or bit-identical positions when a mesh has no weld map)
+become one point, so the mesh is watertight where the surface is. ``primvars:normals`` and
+``primvars:st`` are then "vertex" when every welded point has one value, and indexed
+"faceVarying" otherwise (st across a UV seam, normals around a cap's rim), so no value is
+lost or averaged. st is the scene's UV as it is (USD's st origin is bottom-left, like ours).
+``doubleSided`` is set for double-sided surfaces (ribbons).
+
+.usdz: the crate file is packaged by usd-core's own usdz writer (Sdf.ZipFileWriter: 64-byte
+aligned, uncompressed entries, as the usdz specification requires).
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from cgamesh.errors import ExportError
+from cgamesh.export.atomic import atomic_path
+from cgamesh.export.checks import check_surfaces, column_bounds
+from cgamesh.material import Material
+from cgamesh.mesh import SurfaceMesh
+from cgamesh.weld import weld_by_position
+
+SUFFIXES = (".usda", ".usdc", ".usd", ".usdz")
+MATERIALS_SCOPE = "Materials"
+
+
+def write_usd(
+    path: str | os.PathLike[str],
+    surfaces: Sequence[tuple[SurfaceMesh, Material]],
+    *,
+    up: str,
+    meters_per_unit: float,
+    source_units: str,
+    tangents: bool = False,
+    quantize: bool = False,
+) -> int:
+    """Write every (mesh, material) pair into one USD file at ``path``; returns its size in bytes.
+
+    The format follows the suffix (.usda, .usdc, .usd, .usdz). ``tangents`` and ``quantize``
+    are glTF options and are ignored here. Raises ExportError (leaving any existing file
+    untouched) for inconsistent meshes or a file that cannot be written, and
+    MissingDependencyError when usd-core is not installed.
+    """
+    target = Path(path)
+    suffix = target.suffix.lower()
+    if suffix not in SUFFIXES:
+        raise ExportError(f"cannot export {path}: a USD file ends in one of {', '.join(SUFFIXES)}, got {suffix!r}")
+    scale = check_surfaces(path, surfaces, up, meters_per_unit)
+    pxr = _pxr()
+    stage = build_stage(pxr, surfaces, up=up, meters_per_unit=scale, source_units=source_units,
+                        root=_root_name(pxr, target), y_up=suffix == ".usdz")
+    layer = stage.GetRootLayer()
+    with atomic_path(target) as tmp:
+        if suffix == ".usdz":
+            with tempfile.TemporaryDirectory(prefix="cgamesh-usdz-", dir=_scratch_dir()) as folder:
+                crate = Path(folder) / f"{_root_name(pxr, target)}.usdc"
+                _export(layer, crate, target)
+                _package(pxr, crate, tmp, target)
+        else:
+            _export(layer, tmp, target)
+    return target.stat().st_size
+
+
+def _scratch_dir() -> str | None:
+    """Where the crate file inside a .usdz is written first: memory (/dev/shm) when there is
+    one, so packaging reads it back from RAM; else the system's temporary folder."""
+    shm = "/dev/shm"
+    return shm if os.path.isdir(shm) and os.access(shm, os.W_OK) else None
+
+
+def _package(pxr: _Pxr, crate: Path, where: Path, target: Path) -> None:
+    """The .usdz holding the one crate file, by usd-core's own usdz writer (Sdf.ZipFileWriter,
+    which UsdUtils.CreateNewUsdzPackage also uses: the stage references no other asset, so
+    there is nothing for that function's dependency search to find)."""
+    try:
+        writer = pxr.Sdf.ZipFileWriter.CreateNew(str(where))
+        writer.AddFile(str(crate), crate.name)
+        writer.Save()
+    except Exception as exc:  # pxr raises its own Tf.ErrorException
+        raise ExportError(f"cannot write {target}: {' '.join(str(exc).split())}") from None
+
+
+def _export(layer, where: Path, target: Path) -> None:
+    try:
+        ok = layer.Export(str(where))
+    except Exception as exc:  # pxr raises its own Tf.ErrorException
+        raise ExportError(f"cannot write {target}: {' '.join(str(exc).split())}") from None
+    if not ok:
+        raise ExportError(f"cannot write {target}: usd-core could not write the layer")
+
+
+class _Pxr:
+    """The pxr modules this writer uses, imported together once."""
+
+    def __init__(self) -> None:
+        from cgamesh.optional import require
+
+        require("pxr", "usd", "USD export")
+        from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade, UsdUtils, Vt
+
+        self.Gf, self.Sdf, self.Usd, self.UsdGeom, self.UsdShade, self.UsdUtils, self.Vt = (
+            Gf, Sdf, Usd, UsdGeom, UsdShade, UsdUtils, Vt)
+
+
+_PXR: _Pxr | None = None
+
+
+def _pxr() -> _Pxr:
+    global _PXR
+    if _PXR is None:
+        _PXR = _Pxr()
+    return _PXR
+
+
+def _root_name(pxr: _Pxr, target: Path) -> str:
+    stem = target.stem
+    return stem if pxr.Sdf.Path.IsValidIdentifier(stem) else "Scene"
+
+
+def build_stage(pxr: _Pxr, surfaces, *, up: str, meters_per_unit: float, source_units: str, root: str,
+                y_up: bool = False):
+    """An in-memory stage holding every surface (see the module docstring).
+
+    ``y_up``: the stage must be +Y up (a .usdz, by the ARKit rules); a z-up scene then gets
+    upAxis Y and a -90 degree rotation about X on the default prim, mapping (x, y, z) to
+    (x, z, -y) as the glTF export does, with the points themselves unchanged.
+    """
+    Sdf, Usd, UsdGeom, UsdShade = pxr.Sdf, pxr.Usd, pxr.UsdGeom, pxr.UsdShade
+    stage = Usd.Stage.CreateInMemory()
+    rotate = y_up and up == "z"
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z if up == "z" and not rotate else UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(stage, float(meters_per_unit))
+    stage.GetRootLayer().customLayerData = {
+        "cgamesh": {"source_units": source_units, "meters_per_unit": float(meters_per_unit), "source_up": up}}
+    root_path = Sdf.Path.absoluteRootPath.AppendChild(root)
+    root_xform = UsdGeom.Xform.Define(stage, root_path)
+    if rotate:
+        root_xform.AddRotateXOp().Set(-90.0)
+    root_prim = root_xform.GetPrim()
+    stage.SetDefaultPrim(root_prim)
+    Usd.ModelAPI(root_prim).SetKind("component")
+    names = {mesh.name for mesh, _ in surfaces}
+    scope_name = MATERIALS_SCOPE
+    while scope_name in names:
+        scope_name = "_" + scope_name
+    scope = UsdGeom.Scope.Define(stage, root_path.AppendChild(scope_name)).GetPath()
+    for mesh, material in surfaces:
+        usd_mesh = _define_mesh(pxr, stage, root_path.AppendChild(mesh.name), mesh)
+        usd_material = _define_material(pxr, stage, scope.AppendChild(mesh.name), material)
+        binding = UsdShade.MaterialBindingAPI.Apply(usd_mesh.GetPrim())
+        binding.Bind(usd_material)
+    return stage
+
+
+def welded(mesh: SurfaceMesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(keep, point_of, repeated): the vertices kept as points (P,), each vertex's point index
+    (V,) int32, and the vertices that repeat an earlier one (R,)."""
+    weld = mesh.weld if mesh.weld is not None else weld_by_position(mesh.positions)
+    weld = np.asarray(weld)
+    v = mesh.vertex_count
+    own = weld == np.arange(v, dtype=weld.dtype)
+    keep = np.flatnonzero(own)
+    index = np.empty(v, dtype=np.int32)
+    index[keep] = np.arange(len(keep), dtype=np.int32)
+    return keep, index[weld], np.flatnonzero(~own)
+
+
+def _define_mesh(pxr: _Pxr, stage, prim_path, mesh: SurfaceMesh):
+    Gf, Sdf, UsdGeom, Vt = pxr.Gf, pxr.Sdf, pxr.UsdGeom, pxr.Vt
+    positions = np.asarray(mesh.positions, dtype=np.float64)
+    lo, hi = column_bounds(positions)
+    centre = 0.5 * (lo + hi)
+    keep, point_of, repeated = welded(mesh)
+    points = np.empty((len(keep), 3), dtype=np.float32)
+    kept = positions[keep]
+    for j in range(3):  # column by column: one rounding to float32, no (P, 3) float64 temporary
+        np.subtract(kept[:, j], centre[j], out=points[:, j], casting="same_kind")
+    faces = np.ascontiguousarray(mesh.faces, dtype=np.int32)
+    weld = point_of[faces]
+
+    usd_mesh = UsdGeom.Mesh.Define(stage, prim_path)
+    usd_mesh.AddTranslateOp(precision=UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(*centre.tolist()))
+    usd_mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    usd_mesh.CreateOrientationAttr(UsdGeom.Tokens.rightHanded)
+    usd_mesh.CreateDoubleSidedAttr(bool(mesh.double_sided))
+    usd_mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
+    usd_mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(faces), 3, dtype=np.int32)))
+    usd_mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(weld.ravel()))
+    usd_mesh.CreateExtentAttr(Vt.Vec3fArray.FromNumpy(column_bounds(points).astype(np.float32)))
+
+    primvars = UsdGeom.PrimvarsAPI(usd_mesh.GetPrim())
+    normals = np.asarray(mesh.normals, dtype=np.float64)
+    length = np.sqrt(np.einsum("ij,ij->i", normals, normals))
+    unit = np.empty(normals.shape, dtype=np.float32)
+    for j in range(3):
+        np.divide(normals[:, j], length, out=unit[:, j], casting="same_kind")
+    first_of = np.asarray(mesh.weld if mesh.weld is not None else keep[point_of])[repeated]
+    _primvar(pxr, primvars, "normals", Sdf.ValueTypeNames.Normal3fArray, Vt.Vec3fArray, unit, keep,
+             repeated, first_of, faces)
+    _primvar(pxr, primvars, "st", Sdf.ValueTypeNames.TexCoord2fArray, Vt.Vec2fArray,
+             np.asarray(mesh.uvs, dtype=np.float32), keep, repeated, first_of, faces)
+    return usd_mesh
+
+
+def _primvar(pxr, primvars, name, value_type, array_type, values, keep, repeated, first_of, faces) -> None:
+    """"vertex" when every repeated vertex has the value of the vertex it repeats, else indexed
+    "faceVarying" (values per vertex, indices per triangle corner)."""
+    UsdGeom, Vt = pxr.UsdGeom, pxr.Vt
+    if np.array_equal(values[repeated], values[first_of]):
+        primvar = primvars.CreatePrimvar(name, value_type, UsdGeom.Tokens.vertex)
+        primvar.Set(array_type.FromNumpy(np.ascontiguousarray(values[keep])))
+        return
+    primvar = primvars.CreatePrimvar(name, value_type, UsdGeom.Tokens.faceVarying)
+    primvar.Set(array_type.FromNumpy(np.ascontiguousarray(values)))
+    primvar.SetIndices(Vt.IntArray.FromNumpy(faces.ravel()))
+
+
+def _define_material(pxr: _Pxr, stage, prim_path, material: Material):
+    Gf, Sdf, UsdShade = pxr.Gf, pxr.Sdf, pxr.UsdShade
+    usd_material = UsdShade.Material.Define(stage, prim_path)
+    shader = UsdShade.Shader.Define(stage, prim_path.AppendChild("PreviewSurface"))
+    shader.CreateIdAttr("UsdPreviewSurface")
+    shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*map(float, material.color)))
+    shader.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(float(material.roughness))
+    shader.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(float(material.metallic))
+    usd_material.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
+    return usd_material

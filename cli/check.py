@@ -1,0 +1,66 @@
+"""``cgamesh check FILE``: the mesh-quality report of a scene file or an exported mesh file."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+EXIT_QUALITY = 1  # --strict and a threshold broken
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {value}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="cgamesh check",
+        description="Print the mesh-quality report of a scene (.yaml, meshed first) or of an exported file "
+                    "(.glb, .gltf, .usd, .usda, .usdc, .usdz, .obj, .ply, .stl).",
+    )
+    parser.add_argument("file", help="a scene file or an exported mesh file")
+    parser.add_argument("--json", action="store_true", help="print the report as JSON instead of a table")
+    parser.add_argument("--report", metavar="REPORT.json", help="also write the report as JSON to this file")
+    parser.add_argument("--strict", action="store_true", help="exit 1 when a threshold is broken")
+    parser.add_argument("--around", type=_count, help="scene files: vertices around every circle")
+    parser.add_argument("--along", type=_count, help="scene files: rings along every surface")
+    parser.add_argument("--max-aspect", type=float, help="also refuse triangles with a larger aspect ratio")
+    parser.add_argument("--min-angle", type=float, help="also refuse triangles with a smaller angle (degrees)")
+    parser.add_argument("--max-uv-flips", type=int, help="also refuse more triangles with flipped UVs")
+    parser.add_argument("--max-normal-deviation", type=float,
+                        help="also refuse normals further from their faces' (degrees)")
+    parser.add_argument("-q", "--quiet", action="store_true", help="print nothing (the exit status tells)")
+    return parser
+
+
+def run(args: argparse.Namespace):
+    """Print the table (or JSON); returns 1 under --strict when a threshold is broken."""
+    from cgamesh.quality import Thresholds, load_meshes, report
+
+    path = Path(args.file)
+    if path.suffix.lower() in (".yaml", ".yml"):
+        from cgamesh.pipeline import Resolution, mesh_scene
+        from cgamesh.scene import load_scene
+
+        meshes = [mesh for mesh, _ in mesh_scene(load_scene(path), Resolution(args.around, args.along))]
+    else:
+        meshes = load_meshes(path)
+    limits = Thresholds(max_aspect_ratio=args.max_aspect, min_angle_degrees=args.min_angle,
+                        uv_flips=args.max_uv_flips, max_normal_deviation_degrees=args.max_normal_deviation)
+    result = report(meshes, str(path), limits)
+    if args.report:
+        from cgamesh.export.atomic import atomic_write
+
+        with atomic_write(args.report) as f:
+            f.write(result.to_json().encode() + b"\n")
+    if not args.quiet:
+        print(result.to_json() if args.json else result.table())
+    if args.strict and result.failures():
+        return EXIT_QUALITY
+    return None

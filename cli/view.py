@@ -1,0 +1,49 @@
+"""``cgamesh view SCENE.yaml -o PAGE.html``: one self-contained HTML page showing the scene."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from cgamesh.errors import InvalidInputError
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {value}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="cgamesh view",
+        description="Write one self-contained HTML page (works offline) showing the scene's meshes with "
+                    "three.js and its control circles / point pairs with ganja.js.",
+    )
+    parser.add_argument("scene", help="the YAML scene file")
+    parser.add_argument("-o", "--output", required=True, help="the page to write (.html)")
+    parser.add_argument("--around", type=_count, help="vertices around every circle (overrides the file)")
+    parser.add_argument("--along", type=_count, help="rings along every surface (overrides the file)")
+    parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    return parser
+
+
+def run(args: argparse.Namespace) -> str:
+    from cgamesh.pipeline import Resolution, mesh_scene
+    from cgamesh.scene import load_scene
+    from cgamesh.viewer import write_page
+
+    output = Path(args.output)
+    if output.suffix.lower() not in (".html", ".htm"):
+        raise InvalidInputError(f"{output}: unknown output format {output.suffix or '(no extension)'!r}; "
+                                "expected .html")
+    start = time.perf_counter()
+    scene = load_scene(args.scene)
+    meshes = mesh_scene(scene, Resolution(args.around, args.along))
+    written = write_page(output, scene, meshes)
+    return f"{output}: {len(meshes)} surface{'s' if len(meshes) != 1 else ''}, {time.perf_counter() - start:.2f} s, {written} bytes"
