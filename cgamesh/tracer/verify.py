@@ -1,0 +1,224 @@
+"""The mesh against the ray tracer: how far its vertices are from the traced surface, how far
+its normals turn from the traced normals, and whether their signs hold together.
+
+For every vertex x with normal n, the ray from x + s n (s puts the start outside the surface's
+bounding sphere) along -n is traced through the analytic surface (and its caps), never the
+mesh. Of all its hits the one nearest the vertex is kept; its distance from the vertex
+(relative to the radius of the surface's bounding sphere) and the angle between the traced
+normal's line and the vertex normal's line are reported (|cos|: the sign of a normal is a
+convention, checked apart). Where hits lie equally near, within the distance threshold (a
+vertex on a cap's rim, or on a crease at a spline joint, belongs to two sheets), the one whose
+normal agrees best is kept. A ray with no hit at all counts as missed.
+
+Signs. The traced normal keeps the raw sign of eq. 25, continuous over the surface except
+across a fold (where it passes through zero and reverses). So across every mesh edge whose
+two traced normals agree in sign (n_u . n_v > 0: no fold between them), the mesh normals must
+keep the same side of them: sign(m_u . n_u) = sign(m_v . n_v). A vertex with a broken edge is
+a sign break; a single flipped normal breaks all its edges. For circle surfaces the mesh's
+field must also point away from the circles' centres on the whole, as the scene format
+requires: sum over surface vertices of m . (x - centre of x's circle) > 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cgamesh.errors import InvalidInputError
+from cgamesh.objects import circle_euclidean
+from cgamesh.tracer.evolved import TracedSurface
+from cgamesh.tracer.rays import Rays
+
+# Defaults of the thresholds (cgamesh verify --max-angle / --max-distance / --max-missed).
+MAX_ANGLE_DEGREES = 0.1
+MAX_DISTANCE = 1e-5
+MAX_MISSED = 0.0
+# Open edges (a ribbon's sides, a cap's rim, the end objects of an open curve) are widened by
+# this many times the distance threshold (relative), so that vertices stored on them with the
+# file's rounding still hit them.
+EDGE_SLACK_FACTOR = 100.0
+
+
+@dataclass(frozen=True)
+class Thresholds:
+    max_angle: float = MAX_ANGLE_DEGREES
+    max_distance: float = MAX_DISTANCE
+    max_missed: float = MAX_MISSED
+
+
+@dataclass(frozen=True)
+class VertexCheck:
+    """Per vertex: distance (relative, NaN if missed), angle (degrees, NaN if missed), the hit's
+    parameter, the traced unit normal (raw sign; NaN if missed) and the hit point."""
+
+    distance: np.ndarray
+    angle: np.ndarray
+    param: np.ndarray
+    normal: np.ndarray
+    point: np.ndarray
+
+    @property
+    def missed(self) -> np.ndarray:
+        return np.isnan(self.distance)
+
+
+@dataclass(frozen=True)
+class SurfaceReport:
+    name: str
+    vertices: int
+    missed: float
+    distance_max: float
+    distance_p99: float
+    angle_max: float
+    angle_p99: float
+    sign_breaks: int
+    outward: bool | None
+    passed: bool
+
+
+def line_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Angles in degrees (N,) between the lines of unit vectors a, b (N, 3), in [0, 90]."""
+    cross = np.linalg.norm(np.cross(a, b), axis=1)
+    return np.degrees(np.arctan2(cross, np.abs(np.einsum("ni,ni->n", a, b))))
+
+
+def check_vertices(surface: TracedSurface, positions: np.ndarray, normals: np.ndarray,
+                   tie: float = MAX_DISTANCE, chunk: int = 16384) -> VertexCheck:
+    """Trace the ray through every vertex along its normal and compare (see the module doc).
+
+    ``tie``: hits within this distance (relative to the bounding radius) of the nearest are ties
+    (the distance threshold); open edges are widened by EDGE_SLACK_FACTOR times it, and rays
+    that pass within about that distance of touching the surface count as touching it.
+    Vertices are traced ``chunk`` at a time (bounding the memory of the root finder).
+    """
+    if len(positions) > chunk:
+        parts = [check_vertices(surface, positions[k:k + chunk], normals[k:k + chunk], tie, chunk)
+                 for k in range(0, len(positions), chunk)]
+        return VertexCheck(*(np.concatenate([getattr(p, name) for p in parts])
+                             for name in ("distance", "angle", "param", "normal", "point")))
+    count = len(positions)
+    centre, radius = surface.bound_centre, surface.bound_radius
+    reach = np.linalg.norm(positions - centre, axis=1) + 1.01 * radius
+    rays = Rays.from_origin_direction(positions + reach[:, None] * normals, -normals)
+    rows, t, param = surface.candidates(rays, -np.inf, EDGE_SLACK_FACTOR * tie, root_rtol=tie)
+    gap = np.abs(t - reach[rows])
+    nearest = np.full(count, np.inf)
+    np.minimum.at(nearest, rows, gap)
+    tied = gap <= nearest[rows] + tie * radius
+    rows, t, param, gap = rows[tied], t[tied], param[tied], gap[tied]
+    points = rays.origins[rows] + t[:, None] * rays.directions[rows]
+    traced = surface.normals(points, param)
+    angle = line_angle(traced, normals[rows])
+    order = np.lexsort((angle, rows))
+    first = order[np.concatenate([[True], rows[order][1:] != rows[order][:-1]])]
+    out = {"distance": np.full(count, np.nan), "angle": np.full(count, np.nan),
+           "param": np.full(count, np.nan), "normal": np.full((count, 3), np.nan),
+           "point": np.full((count, 3), np.nan)}
+    which = rows[first]
+    out["distance"][which] = gap[first] / radius
+    out["angle"][which] = angle[first]
+    out["param"][which] = param[first]
+    out["normal"][which] = traced[first]
+    out["point"][which] = points[first]
+    return VertexCheck(**out)
+
+
+def sign_breaks(check: VertexCheck, normals: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Vertices (bool (V,)) with a mesh edge across which the traced field keeps its sign but
+    the mesh normal changes sides of it."""
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    u, v = edges[:, 0], edges[:, 1]
+    traced = check.normal
+    side = np.sign(np.einsum("vi,vi->v", normals, traced))
+    continuous = np.einsum("ei,ei->e", traced[u], traced[v]) > 0.0  # NaN (missed) compares False
+    broken = continuous & (side[u] * side[v] < 0.0)
+    out = np.zeros(len(normals), dtype=bool)
+    out[u[broken]] = True
+    out[v[broken]] = True
+    return out
+
+
+def outward(surface: TracedSurface, check: VertexCheck, normals: np.ndarray) -> bool | None:
+    """Circle surfaces: whether sum m . (x - centre of x's circle) > 0 over the traced vertices
+    on the surface itself (not on caps); None for point pairs or when no vertex qualifies."""
+    on = np.flatnonzero(np.isfinite(check.param) & (check.param >= 0.0))
+    if surface.grade != 3 or on.size == 0:
+        return None
+    centres, _, _ = circle_euclidean(surface.surface.sample(check.param[on]).blades)
+    centres = surface.frame.to_world(centres)
+    return bool(np.einsum("vi,vi->", normals[on], check.point[on] - centres) > 0.0)
+
+
+def summarise(name: str, check: VertexCheck, breaks: np.ndarray | None = None, facing: bool | None = None,
+              thresholds: Thresholds = Thresholds()) -> SurfaceReport:
+    count = len(check.distance)
+    missed = float(np.mean(check.missed)) if count else 0.0
+    found = ~check.missed
+    if np.any(found):
+        d, a = check.distance[found], check.angle[found]
+        stats = (float(d.max()), float(np.percentile(d, 99)), float(a.max()), float(np.percentile(a, 99)))
+    else:
+        stats = (np.nan,) * 4
+    broken = int(np.count_nonzero(breaks)) if breaks is not None else 0
+    passed = (missed <= thresholds.max_missed and np.any(found) and stats[0] <= thresholds.max_distance
+              and stats[2] <= thresholds.max_angle and broken == 0 and facing is not False)
+    return SurfaceReport(name, count, missed, *stats, broken, facing, bool(passed))
+
+
+def check_mesh(surface: TracedSurface, mesh, thresholds: Thresholds = Thresholds()) -> SurfaceReport:
+    """The whole check of one mesh (MeshData or SurfaceMesh: positions, normals, faces)."""
+    check = check_vertices(surface, mesh.positions, mesh.normals, thresholds.max_distance)
+    breaks = sign_breaks(check, mesh.normals, np.asarray(mesh.faces))
+    return summarise(surface.name, check, breaks, outward(surface, check, mesh.normals), thresholds)
+
+
+def format_reports(reports: list[SurfaceReport], thresholds: Thresholds = Thresholds()) -> str:
+    """A table: one row per surface, then the thresholds."""
+    header = (f"{'surface':<20} {'vertices':>8} {'missed':>7} {'dist max':>9} {'dist p99':>9} "
+              f"{'angle max':>10} {'angle p99':>10} {'sign breaks':>11} {'outward':>7}  result")
+    lines = [header, "-" * len(header)]
+    for r in reports:
+        facing = {None: "-", True: "yes", False: "NO"}[r.outward]
+        lines.append(f"{r.name[:20]:<20} {r.vertices:>8} {100 * r.missed:>6.2f}% {r.distance_max:>9.2e} "
+                     f"{r.distance_p99:>9.2e} {r.angle_max:>9.4f}° {r.angle_p99:>9.4f}° {r.sign_breaks:>11} "
+                     f"{facing:>7}  {'pass' if r.passed else 'FAIL'}")
+    lines.append(f"thresholds: distance <= {thresholds.max_distance:g} of the bounding radius, normal angle <= "
+                 f"{thresholds.max_angle:g}°, missed <= {100 * thresholds.max_missed:g}%, no sign breaks, "
+                 "circle surfaces outward")
+    return "\n".join(lines)
+
+
+def verify_meshes(world_surfaces: list[TracedSurface], meshes, thresholds: Thresholds = Thresholds(),
+                  progress=lambda label="": None) -> list[SurfaceReport]:
+    """A report per traced surface, with the mesh of the same name (MeshData) checked against it.
+
+    Raises InvalidInputError when a surface has no mesh of its name in the file.
+    """
+    by_name = {mesh.name: mesh for mesh in meshes}
+    reports = []
+    for surface in world_surfaces:
+        mesh = by_name.get(surface.name)
+        if mesh is None:
+            raise InvalidInputError(f"the mesh file has no mesh named {surface.name!r} (it has "
+                                    f"{', '.join(sorted(by_name)) or 'none'})")
+        reports.append(check_mesh(surface, mesh, thresholds))
+        progress(surface.name)
+    return reports
+
+
+def comparison_image(world, meshes, width: int, height: int) -> np.ndarray:
+    """[traced | mesh | 4 x |difference|] side by side (height, 3 width, 3), for ``verify --image``.
+
+    ``world``: the scene's surfaces only, without shadows or reflections (both halves are
+    shaded alike; the mesh half by ``raster``); ``meshes``: MeshData in the world's surface order.
+    """
+    from cgamesh.tracer.raster import rasterise
+    from cgamesh.tracer.render import render
+
+    traced = render(world, width, height)
+    materials = {s.name: s.material for s in world.surfaces()}
+    drawn, _ = rasterise(world, [(m.positions, m.normals, m.faces, materials[m.name]) for m in meshes
+                                 if m.name in materials], width, height)
+    difference = np.clip(4.0 * np.abs(traced - drawn), 0.0, 1.0)
+    return np.concatenate([traced, drawn, difference], axis=1)
