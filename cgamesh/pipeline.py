@@ -23,7 +23,7 @@ from cgamesh.meshing import mesh_circle_surface
 from cgamesh.ribbons import mesh_ribbon_surface
 from cgamesh.scene import Scene, SurfaceSpec
 from cgamesh.surface import EvolvedSurface
-from cgamesh.tessellation import mesh_to_tolerance
+from cgamesh.tessellation import mesh_to_tolerance, ribbon_to_tolerance
 
 
 @dataclass(frozen=True)
@@ -113,8 +113,7 @@ def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution()) -> Su
     try:
         if spec.type == "point_pairs":  # caps are circles only (the scene loader refuses them here)
             if tolerance is not None:
-                raise InvalidInputError("tolerance-driven tessellation of point_pairs surfaces is not "
-                                        "available in this version; give resolution: {around, along}")
+                return ribbon_to_tolerance(surface, tolerance, closed=spec.closed)
             return mesh_ribbon_surface(surface, around, along, closed=spec.closed)
         if tolerance is not None:
             return mesh_to_tolerance(surface, tolerance, caps=spec.caps, closed=spec.closed)

@@ -265,19 +265,21 @@ def _unit_normals(n_a: np.ndarray, n_b: np.ndarray, s: np.ndarray, scale: np.nda
     return normals, size_sq
 
 
-def mesh_ribbon_surface(surface: EvolvedSurface, around: int, along: int,
-                        closed: bool = False) -> SurfaceMesh:
+def mesh_ribbon_surface(surface: EvolvedSurface, around: int, along: int | None = None,
+                        closed: bool = False, t: np.ndarray | None = None) -> SurfaceMesh:
     """Triangulate an evolved point-pair surface on ``along`` rulings of ``around`` vertices each.
 
     Returns a double-sided SurfaceMesh (along * around vertices, ruling-major) in world
     coordinates; u = s across, v along by arc length. ``closed``: the curve ends where it
     starts (kb / catmull_rom loops), and the last ruling repeats the first bit for bit.
     """
-    if around < 2 or along < 2:
+    if t is None and along is not None and along >= 2:
+        t = np.linspace(0.0, surface.segment_count, along)
+    along = None if t is None else len(t)
+    if around < 2 or along is None or along < 2:
         raise InvalidInputError(f"surface '{surface.name}': a ribbon needs around >= 2 and along >= 2, "
                                 f"got around = {around}, along = {along}")
     surface.check_projection_exists()
-    t = np.linspace(0.0, surface.segment_count, along)
     rings = PairRings.from_projection(surface.sample(t), surface.frame)
     d = rings.b - rings.a
     n_a, n_b, scale = _ruling_normals(surface, t, rings, d)
