@@ -88,7 +88,12 @@ def render_table(scene, sizes, samples: int) -> dict:
     return images
 
 
-def accuracy_table(scene, width: int, height: int, counts) -> None:
+def accuracy_table(scene, width: int, height: int, counts) -> dict:
+    """Print the sampled finder's speed and accuracy against N; return the figures.
+
+    Returns {"rays", "polynomial_seconds", "rows": [{"N", "seconds", "missed", "extra",
+    "dist_max", "dist_p99", "dist_median", "normal_max", "normal_p99"}, ...]}.
+    """
     world = build_world(scene)
     surface = world.surfaces()[0]
     rays = world.camera.rays(width, height)
@@ -115,7 +120,7 @@ def accuracy_table(scene, width: int, height: int, counts) -> None:
           "to the bounding radius, over the hits both finders agree on")
     print(f"{'N':>6} {'seconds':>8} {'rays/s':>10} {'missed':>7} {'extra':>6} {'dist max':>9} {'dist p99':>9} "
           f"{'dist median':>11} {'normal max':>10} {'normal p99':>10}")
-    errors = []
+    errors, rows = [], []
     for n in counts:
         sampled = surface.with_finder(RootFinder("sampled", n))
         start = time.perf_counter()
@@ -132,6 +137,9 @@ def accuracy_table(scene, width: int, height: int, counts) -> None:
         rough_normals = surface.normals(rays.take(both).at(rough.t[both]), rough.param[both])
         angle = line_angle(rough_normals, surface.normals(rays.take(both).at(exact.t[both]), exact.param[both]))
         errors.append((np.median(d), np.percentile(d, 99)))
+        rows.append({"N": n, "seconds": seconds, "missed": missed, "extra": extra, "dist_max": float(d.max()),
+                     "dist_p99": float(np.percentile(d, 99)), "dist_median": float(np.median(d)),
+                     "normal_max": float(angle.max()), "normal_p99": float(np.percentile(angle, 99))})
         print(f"{n:>6} {seconds:>8.3f} {len(rays) / seconds:>10,.0f} {missed:>7} {extra:>6} {d.max():>9.2e} "
               f"{np.percentile(d, 99):>9.2e} {np.median(d):>11.2e} {angle.max():>9.4f}° "
               f"{np.percentile(angle, 99):>9.4f}°")
@@ -140,6 +148,7 @@ def accuracy_table(scene, width: int, height: int, counts) -> None:
     assert all(later < earlier for earlier, later in zip(medians, medians[1:])), medians
     if max(counts) >= 512:
         assert errors[-1][1] < 1e-4, errors[-1]
+    return {"rays": len(rays), "polynomial_seconds": exact_seconds, "rows": rows}
 
 
 def main() -> None:

@@ -8,21 +8,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
 
-from cgamesh import objects
 from cgamesh import uv as uv_map
-from cgamesh.curves.bezier import Bezier, RationalBezier
-from cgamesh.curves.kochanek_bartels import KochanekBartels
-from cgamesh.curves.linear import Linear
-from cgamesh.errors import CgameshError, DegenerateGeometryError, InvalidInputError
-from cgamesh.frame import LocalFrame
+from cgamesh.construction import build_surface, make_curve  # noqa: F401 (part of this module's API)
+from cgamesh.errors import CgameshError, InvalidInputError
 from cgamesh.material import Material
 from cgamesh.mesh import SurfaceMesh
 from cgamesh.meshing import mesh_circle_surface
 from cgamesh.ribbons import mesh_ribbon_surface
 from cgamesh.scene import Scene, SurfaceSpec
-from cgamesh.surface import EvolvedSurface
 from cgamesh.tessellation import mesh_to_tolerance, ribbon_to_tolerance
 
 
@@ -33,67 +27,6 @@ class Resolution:
     around: int | None = None
     along: int | None = None
     tolerance: float | None = None
-
-
-def make_curve(spec: SurfaceSpec):
-    """The curve of a surface spec, over its controls."""
-    n = len(spec.controls)
-    if spec.curve == "linear":
-        return Linear(n)
-    if spec.curve == "bezier":
-        return Bezier(n)
-    if spec.curve == "rational_bezier":
-        return RationalBezier(tuple(c.weight for c in spec.controls))
-    if spec.curve == "kb":
-        return KochanekBartels(n, spec.tension, spec.bias, spec.continuity, spec.closed)
-    if spec.curve == "catmull_rom":
-        return KochanekBartels(n, closed=spec.closed)
-    raise InvalidInputError(f"{spec.location}.curve: unknown curve kind {spec.curve!r}")
-
-
-def _circle_points(spec: SurfaceSpec) -> tuple[np.ndarray, np.ndarray]:
-    """Points (n, 3) that fix each circle control and how far the circle reaches past them (n,)."""
-    points, reach = [], []
-    for control in spec.controls:
-        if control.through is not None:
-            points.extend(control.through)
-            reach.extend([0.0, 0.0, 0.0])
-        else:
-            points.append(control.center)
-            reach.append(control.radius)
-    return np.array(points, dtype=np.float64), np.array(reach)
-
-
-def build_surface(spec: SurfaceSpec) -> EvolvedSurface:
-    """Normalised (and, with ``align``, aligned) control blades in a local frame, with the curve."""
-    try:
-        if spec.type == "circles":
-            frame = LocalFrame.enclosing(*_circle_points(spec))
-            blades = np.stack([_circle_blade(control, frame) for control in spec.controls])
-            grade = objects.CIRCLE_GRADE
-        else:
-            ends = np.array([p for c in spec.controls for p in (c.a, c.b)], dtype=np.float64)
-            frame = LocalFrame.enclosing(ends)
-            a = frame.to_local(np.array([c.a for c in spec.controls], dtype=np.float64))
-            b = frame.to_local(np.array([c.b for c in spec.controls], dtype=np.float64))
-            blades = objects.point_pair(a, b)
-            grade = objects.POINT_PAIR_GRADE
-    except DegenerateGeometryError as error:
-        raise DegenerateGeometryError(f"{spec.location}: {error}") from None
-    if spec.align:
-        blades = objects.align_orientations(blades, grade)
-    return EvolvedSurface(spec.name, grade, blades, make_curve(spec), frame)
-
-
-def _circle_blade(control, frame: LocalFrame) -> np.ndarray:
-    if control.through is not None:
-        a, b, d = (frame.to_local(np.array(p, dtype=np.float64)) for p in control.through)
-        return objects.circle_through(a, b, d)
-    return objects.circle_from_center_normal_radius(
-        frame.to_local(np.array(control.center, dtype=np.float64)),
-        np.array(control.normal, dtype=np.float64),
-        control.radius / frame.scale,
-    )
 
 
 def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution()) -> SurfaceMesh:

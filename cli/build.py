@@ -10,28 +10,9 @@ from pathlib import Path
 
 from cgamesh.errors import InvalidInputError
 from cgamesh.export.registry import WRITERS, writer_for
+from cgamesh_cli.arguments import positive_number, whole_number
 
 EXIT_QUALITY = 1  # --strict and a quality threshold broken
-
-
-def _whole_number(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {value}")
-    return value
-
-
-def _positive_number(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value > 0.0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text}")
-    return value
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -42,9 +23,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("scene", help="the YAML scene file (format version 1)")
     parser.add_argument("-o", "--output", required=True, action="append",
                         help=f"output file, repeatable; its extension picks the format: {', '.join(WRITERS)}")
-    parser.add_argument("--around", type=_whole_number, help="vertices around every circle (overrides the file)")
-    parser.add_argument("--along", type=_whole_number, help="rings along every surface (overrides the file)")
-    parser.add_argument("--tolerance", type=_positive_number,
+    parser.add_argument("--around", type=whole_number(2), help="vertices around every circle, or across every ribbon (overrides the file)")
+    parser.add_argument("--along", type=whole_number(2), help="rings along every surface (overrides the file)")
+    parser.add_argument("--tolerance", type=positive_number,
                         help="largest distance of every mesh from its true surface, in file units "
                              "(instead of a resolution; overrides the file)")
     parser.add_argument("--tangents", action="store_true",

@@ -4,18 +4,9 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from cgamesh_cli.arguments import whole_number
 
 EXIT_QUALITY = 1  # --strict and a threshold broken
-
-
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {value}")
-    return value
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -28,8 +19,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--json", action="store_true", help="print the report as JSON instead of a table")
     parser.add_argument("--report", metavar="REPORT.json", help="also write the report as JSON to this file")
     parser.add_argument("--strict", action="store_true", help="exit 1 when a threshold is broken")
-    parser.add_argument("--around", type=_count, help="scene files: vertices around every circle")
-    parser.add_argument("--along", type=_count, help="scene files: rings along every surface")
+    parser.add_argument("--around", type=whole_number(2), help="scene files: vertices around every circle")
+    parser.add_argument("--along", type=whole_number(2), help="scene files: rings along every surface")
     parser.add_argument("--max-aspect", type=float, help="also refuse triangles with a larger aspect ratio")
     parser.add_argument("--min-angle", type=float, help="also refuse triangles with a smaller angle (degrees)")
     parser.add_argument("--max-uv-flips", type=int, help="also refuse more triangles with flipped UVs")

@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from cgamesh.errors import InvalidInputError
+from cgamesh_cli.arguments import whole_number
 
 MAX_SIDE = 16384
 
@@ -22,20 +23,10 @@ def image_size(text: str) -> tuple[int, int]:
     return width, height
 
 
-def sample_count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {value}")
-    return value
-
-
 def add_tracer_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--root-finder", choices=("polynomial", "sampled"), default="polynomial",
                         help="closed-form polynomial roots (default) or the paper's sampled finder")
-    parser.add_argument("--samples", type=sample_count, default=64,
+    parser.add_argument("--samples", type=whole_number(2), default=64,
                         help="objects per curve segment for --root-finder sampled (default 64)")
 
 

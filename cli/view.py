@@ -7,16 +7,7 @@ import time
 from pathlib import Path
 
 from cgamesh.errors import InvalidInputError
-
-
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {value}")
-    return value
+from cgamesh_cli.arguments import whole_number
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -27,8 +18,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("scene", help="the YAML scene file")
     parser.add_argument("-o", "--output", required=True, help="the page to write (.html)")
-    parser.add_argument("--around", type=_count, help="vertices around every circle (overrides the file)")
-    parser.add_argument("--along", type=_count, help="rings along every surface (overrides the file)")
+    parser.add_argument("--around", type=whole_number(2), help="vertices around every circle, or across every ribbon (overrides the file)")
+    parser.add_argument("--along", type=whole_number(2), help="rings along every surface (overrides the file)")
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     return parser
 

@@ -17,12 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh import objects
-from cgamesh.curves.bezier import Bezier, RationalBezier
-from cgamesh.curves.kochanek_bartels import KochanekBartels
-from cgamesh.curves.linear import Linear
-from cgamesh.errors import CgameshError, DegenerateGeometryError, InvalidInputError
-from cgamesh.frame import LocalFrame
+from cgamesh.construction import build_surface
+from cgamesh.errors import CgameshError, DegenerateGeometryError
 from cgamesh.material import Material
 from cgamesh.scene import Scene, SurfaceSpec
 from cgamesh.scene_rendering import Attenuation, PhongMaterial
@@ -63,51 +59,10 @@ class World:
         return [o for o in self.objects if isinstance(o, TracedSurface)]
 
 
-def make_curve(spec: SurfaceSpec):
-    n = len(spec.controls)
-    if spec.curve == "linear":
-        return Linear(n)
-    if spec.curve == "bezier":
-        return Bezier(n)
-    if spec.curve == "rational_bezier":
-        return RationalBezier(tuple(c.weight for c in spec.controls))
-    if spec.curve == "kb":
-        return KochanekBartels(n, spec.tension, spec.bias, spec.continuity, spec.closed)
-    if spec.curve == "catmull_rom":
-        return KochanekBartels(n, closed=spec.closed)
-    raise InvalidInputError(f"{spec.location}.curve: unknown curve kind {spec.curve!r}")
-
-
 def surface_from_spec(spec: SurfaceSpec) -> EvolvedSurface:
     """The evolved surface of a spec, checked to exist all along its curve."""
+    surface = build_surface(spec)
     try:
-        if spec.type == "circles":
-            points, reach = [], []
-            for c in spec.controls:
-                if c.through is not None:
-                    points.extend(c.through)
-                    reach.extend([0.0] * 3)
-                else:
-                    points.append(c.center)
-                    reach.append(c.radius)
-            frame = LocalFrame.enclosing(np.array(points, dtype=np.float64), np.array(reach))
-            blades = np.stack([
-                objects.circle_through(*(frame.to_local(np.array(p, dtype=np.float64)) for p in c.through))
-                if c.through is not None else
-                objects.circle_from_center_normal_radius(frame.to_local(np.array(c.center, dtype=np.float64)),
-                                                         np.array(c.normal, dtype=np.float64),
-                                                         c.radius / frame.scale)
-                for c in spec.controls])
-            grade = objects.CIRCLE_GRADE
-        else:
-            a = np.array([c.a for c in spec.controls], dtype=np.float64)
-            b = np.array([c.b for c in spec.controls], dtype=np.float64)
-            frame = LocalFrame.enclosing(np.concatenate([a, b]))
-            blades = objects.point_pair(frame.to_local(a), frame.to_local(b))
-            grade = objects.POINT_PAIR_GRADE
-        if spec.align:
-            blades = objects.align_orientations(blades, grade)
-        surface = EvolvedSurface(spec.name, grade, blades, make_curve(spec), frame)
         surface.check_projection_exists()
     except CgameshError as error:
         raise type(error)(f"{spec.location}: {error}") from None
