@@ -38,6 +38,9 @@ NEAR_ZERO_FRACTION = 1e-6
 # Consecutive rings whose normals agree less than this (mean cosine below minus it) lie on
 # the two sides of a fold.
 FOLD_AGREEMENT = 0.9
+# The seven-sample estimate of the outward sum decides its sign when the mean |cosine| between
+# normals and radial directions is at least this.
+OUTWARD_TRUST = 0.25
 
 
 def transported_frames(normal: np.ndarray, closed: bool, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -166,6 +169,26 @@ def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, u: np.ndarray, fie
     return signs * (1.0 - 2.0 * ring_parity)[:, None], suspicious
 
 
+def _outward_sum(field: RingNormals, basis: np.ndarray, size: np.ndarray, signs: np.ndarray,
+                 radius: np.ndarray) -> float:
+    """Sum over vertices of n . (x - centre) = s r zeta / |N|: positive when the field points out.
+
+    With one sign per ring, the seven sample angles estimate each ring's mean of zeta / |N| (a
+    cosine); only when that estimate is too near zero to trust its sign (mean |cosine| under
+    OUTWARD_TRUST) is the sum taken over every vertex.
+    """
+    if signs.shape[1] == 1:
+        cosine = field.frame[..., 0] @ normal_field.trig_basis(normal_field.SAMPLE_ANGLES).T  # zeta (K, 7)
+        cosine = cosine / np.linalg.norm(field.sample_normals, axis=-1)
+        estimate = float((cosine.mean(axis=1) * signs[:, 0]) @ radius)
+        if abs(estimate) >= OUTWARD_TRUST * radius.sum():
+            return estimate
+    zeta = normal_field.expand(field.frame[..., :1], basis)[..., 0]
+    zeta /= size
+    zeta *= signs
+    return float(zeta.sum(axis=1) @ radius)
+
+
 def _frame_values(frame: np.ndarray, theta: np.ndarray, speed: np.ndarray) -> np.ndarray:
     """(zeta, rho) (R, M, 2) at theta, zeros replaced by their limit d/dtheta along the circle."""
     values = normal_field.expand(frame, normal_field.trig_basis(theta))
@@ -271,11 +294,7 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
                                       field.raw[ring])
         size[ring, column] = np.linalg.norm(raw[ring, column], axis=-1)
     signs, turning = _continuous_signs(surface, t, u, field, theta, size)
-    # Outward on the whole: sum over vertices of n . (x - centre) = sum s zeta r / |N| > 0.
-    zeta = normal_field.expand(field.frame[..., :1], basis)[..., 0]
-    zeta /= size
-    zeta *= signs
-    if zeta.sum(axis=1) @ rings.radius < 0.0:
+    if _outward_sum(field, basis, size, signs, rings.radius) < 0.0:
         signs = -signs
     raw *= (signs / size)[..., None]
     normals = raw
