@@ -209,10 +209,14 @@ def grid_faces(rings: int, columns: int, signs: np.ndarray) -> np.ndarray:
     winding is reversed too. The majority's winding is written directly; only the minority
     is reordered afterwards.
     """
-    signs = np.broadcast_to(signs, (rings, columns))
-    here, right, below, across = signs[:-1, :-1], signs[:-1, 1:], signs[1:, :-1], signs[1:, 1:]
-    flipped = np.stack([here + right + below < 0.0, right + across + below < 0.0], axis=2)
-    majority_flipped = 2 * np.count_nonzero(flipped) > flipped.size
+    if np.all(signs == signs.flat[0]):  # one sign everywhere (the usual case): nothing to vote on
+        flipped = None
+        majority_flipped = bool(signs.flat[0] < 0.0)
+    else:
+        signs = np.broadcast_to(signs, (rings, columns))
+        here, right, below, across = signs[:-1, :-1], signs[:-1, 1:], signs[1:, :-1], signs[1:, 1:]
+        flipped = np.stack([here + right + below < 0.0, right + across + below < 0.0], axis=2)
+        majority_flipped = 2 * np.count_nonzero(flipped) > flipped.size
     second, third = (2, 1) if majority_flipped else (1, 2)
     corner = (np.arange(rings - 1, dtype=np.int32)[:, None] * columns
               + np.arange(columns - 1, dtype=np.int32)[None, :])
@@ -223,9 +227,10 @@ def grid_faces(rings: int, columns: int, signs: np.ndarray) -> np.ndarray:
     faces[:, :, 1, 0] = corner + 1
     faces[:, :, 1, second] = corner + columns + 1
     faces[:, :, 1, third] = corner + columns
-    minority = ~flipped if majority_flipped else flipped
-    if np.any(minority):
-        faces[minority] = faces[minority][:, [0, 2, 1]]
+    if flipped is not None:
+        minority = ~flipped if majority_flipped else flipped
+        if np.any(minority):
+            faces[minority] = faces[minority][:, [0, 2, 1]]
     return faces.reshape(-1, 3)
 
 
@@ -264,12 +269,13 @@ def drop_zero_area(positions: np.ndarray, faces: np.ndarray, suspects: np.ndarra
 
 
 def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None = None, caps: bool = False,
-                        closed: bool = False, t: np.ndarray | None = None) -> SurfaceMesh:
+                        closed: bool = False, t: np.ndarray | None = None,
+                        with_tangents: bool = False) -> SurfaceMesh:
     """Triangulate an evolved circle surface on rings of ``around`` vertices.
 
     The rings sit at the increasing parameters ``t`` (from 0 to the segment count), or at
     ``along`` evenly spaced ones. Each ring carries around + 1 vertices (the UV seam column
-    repeats the first one).
+    repeats the first one). ``with_tangents``: also the analytic tangents (for normal maps).
     """
     surface.check_projection_exists()
     if t is None:
@@ -301,17 +307,21 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
     # Tangent along +u: the circle's own tangent n x e_r = d x / d theta. The normal is
     # signs * (n x e_r) x x' / |.|, so (normal x tangent) . d x / d t has the sign of ``signs``:
     # w = signs makes the bitangent point along +v (v grows with t).
-    circle_tangent = normal_field.expand(np.stack([u, v], axis=1),
-                                         np.stack([-np.sin(theta), np.cos(theta)], axis=1))
-    tangents = np.concatenate([circle_tangent, np.broadcast_to(signs, size.shape)[..., None]], axis=-1)
+    # Only when an output asks for them: they cost as much as the normals.
+    tangents = None
+    if with_tangents:
+        circle_tangent = normal_field.expand(np.stack([u, v], axis=1),
+                                             np.stack([-np.sin(theta), np.cos(theta)], axis=1))
+        tangents = np.concatenate([circle_tangent, np.broadcast_to(signs, size.shape)[..., None]], axis=-1)
+        tangents[:, -1] = tangents[:, 0]
+        if closed:
+            tangents[-1] = tangents[0]
 
     positions[:, -1] = positions[:, 0]
     normals[:, -1] = normals[:, 0]
-    tangents[:, -1] = tangents[:, 0]
     if closed:
         positions[-1] = positions[0]
         normals[-1] = normals[0]
-        tangents[-1] = tangents[0]
 
     columns = around + 1
     faces = grid_faces(along, columns, signs)
@@ -322,7 +332,8 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
         # widely: such triangles are wound by their own geometry.
         strip = turning[:-1] | turning[1:]
         faces = orient_by_geometry(faces, positions, normals, np.repeat(strip, 2 * around))
-    tangents = tangents.reshape(-1, 4)
+    if tangents is not None:
+        tangents = tangents.reshape(-1, 4)
     suspects = (size <= NEAR_ZERO_FRACTION * field.speed[:, None]).ravel()
     faces = drop_zero_area(positions, faces, suspects)
     travelled = uv_map.along_lengths(field.samples)
@@ -379,7 +390,7 @@ def _add_cap(positions, normals, uvs, faces, tangents, uv_lengths, weld, rings, 
         np.vstack([normals, np.broadcast_to(cap_normal, cap_positions.shape)]),
         np.vstack([uvs, uv_map.disc_uvs(theta, mirrored=facing < 0)]),
         np.vstack([faces, fan.astype(faces.dtype)]),
-        np.vstack([tangents, np.broadcast_to(np.append(facing * u[ring], 1.0), (count, 4))]),
+        None if tangents is None else np.vstack([tangents, np.broadcast_to(np.append(facing * u[ring], 1.0), (count, 4))]),
         np.vstack([uv_lengths, np.full((count, 2), 2.0 * rings.radius[ring])]),
         np.concatenate([weld, weld[first: first + around], [centre]]),
     )

@@ -29,12 +29,13 @@ class Resolution:
     tolerance: float | None = None
 
 
-def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution()) -> SurfaceMesh:
+def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tangents: bool = False) -> SurfaceMesh:
     """The mesh of one surface, in the scene file's frame and units.
 
     A tolerance (from the command line, or the file's unless the command line gives a full
     resolution) asks for the fewest vertices within that distance of the true surface; the
-    mesh's ``max_deviation`` then holds the measured distance.
+    mesh's ``max_deviation`` then holds the measured distance. ``tangents``: the circle mesher's
+    analytic tangents are wanted (an output writes TANGENT).
     """
     tolerance = _tolerance(spec, resolution)
     if tolerance is None:
@@ -49,8 +50,9 @@ def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution()) -> Su
                 return ribbon_to_tolerance(surface, tolerance, closed=spec.closed)
             return mesh_ribbon_surface(surface, around, along, closed=spec.closed)
         if tolerance is not None:
-            return mesh_to_tolerance(surface, tolerance, caps=spec.caps, closed=spec.closed)
-        return mesh_circle_surface(surface, around, along, caps=spec.caps, closed=spec.closed)
+            return mesh_to_tolerance(surface, tolerance, caps=spec.caps, closed=spec.closed, tangents=tangents)
+        return mesh_circle_surface(surface, around, along, caps=spec.caps, closed=spec.closed,
+                                   with_tangents=tangents)
     except CgameshError as error:
         raise type(error)(f"{spec.location}: {error}") from None
 
@@ -71,8 +73,8 @@ def _tolerance(spec: SurfaceSpec, resolution: Resolution) -> float | None:
     return spec.tolerance
 
 
-def mesh_scene(scene: Scene, resolution: Resolution = Resolution(),
-               progress=lambda label: None) -> list[tuple[SurfaceMesh, Material]]:
+def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lambda label: None,
+               tangents: bool = False) -> list[tuple[SurfaceMesh, Material]]:
     """Every surface's mesh with its material, in file order; ``progress(name)`` after each.
 
     The UVs are those of each surface's ``uv`` mode (uv.py: natural, none, or one xatlas atlas
@@ -80,7 +82,7 @@ def mesh_scene(scene: Scene, resolution: Resolution = Resolution(),
     """
     meshes = []
     for spec in scene.surfaces:
-        meshes.append(mesh_surface(spec, resolution))
+        meshes.append(mesh_surface(spec, resolution, tangents))
         progress(spec.name)
     meshes = uv_map.apply_uv_modes(meshes, [(spec.uv, spec.uv_scale) for spec in scene.surfaces])
     return [(mesh, spec.material) for mesh, spec in zip(meshes, scene.surfaces)]

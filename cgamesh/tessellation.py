@@ -159,7 +159,7 @@ def _meet(tolerance: float, along_budget: float, attempt):
 
 
 def mesh_to_tolerance(surface: EvolvedSurface, tolerance: float, caps: bool = False,
-                      closed: bool = False) -> SurfaceMesh:
+                      closed: bool = False, tangents: bool = False) -> SurfaceMesh:
     """The mesh of a circle surface whose deviation from it is at most ``tolerance``.
 
     Its ``max_deviation`` holds the measured figure. After MAX_ATTEMPTS without meeting the
@@ -177,7 +177,7 @@ def mesh_to_tolerance(surface: EvolvedSurface, tolerance: float, caps: bool = Fa
         points = (centre[:, None, :] + radius[:, None, None]
                   * (np.cos(theta)[None, :, None] * u[:, None, :] + np.sin(theta)[None, :, None] * v[:, None, :]))
         rings = _spread(t, points, along_budget, keep, spread)
-        mesh = mesh_circle_surface(surface, around, t=rings, caps=caps, closed=closed)
+        mesh = mesh_circle_surface(surface, around, t=rings, caps=caps, closed=closed, with_tangents=tangents)
         grid = mesh.positions[: len(rings) * (around + 1)].reshape(len(rings), around + 1, 3)
         achieved = grid_deviation(surface, rings, grid, CIRCLES).max
         # The next attempt, if any, tightens both shares alike.

@@ -62,7 +62,8 @@ def run(args: argparse.Namespace) -> str:
     start = time.perf_counter()
     scene = load_scene(args.scene)
     with Progress(len(scene.surfaces), enabled=not args.quiet) as progress:
-        meshes = mesh_scene(scene, Resolution(args.around, args.along, args.tolerance), progress=progress.advance)
+        meshes = mesh_scene(scene, Resolution(args.around, args.along, args.tolerance), progress=progress.advance,
+                            tangents=args.tangents)
     written = [write(output, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit, source_units=scene.units,
                      tangents=args.tangents, quantize=args.quantize) for output in outputs]
     seconds = time.perf_counter() - start

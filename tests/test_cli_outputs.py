@@ -23,9 +23,9 @@ def test_several_outputs_are_written_from_one_meshing(tmp_path, capsys, monkeypa
     calls = []
     original = cgamesh.pipeline.mesh_surface
 
-    def counting(spec, resolution=cgamesh.pipeline.Resolution()):
+    def counting(spec, *args, **kwargs):
         calls.append(spec.name)
-        return original(spec, resolution)
+        return original(spec, *args, **kwargs)
 
     monkeypatch.setattr(cgamesh.pipeline, "mesh_surface", counting)
     outputs = [tmp_path / f"tube{suffix}" for suffix in ALL]

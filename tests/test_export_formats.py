@@ -40,7 +40,7 @@ def exported(tmp_path_factory, request):
         packed = [str(folder / "packed.glb"), str(folder / "packed.gltf")]
         assert main([str(scene_path), "-o", packed[0], "-o", packed[1], "--quantize", "--tangents", *LOW, "-q"]) == 0
         scene = load_scene(scene_path)
-        out[scene_path.stem] = (folder, mesh_scene(scene, Resolution(AROUND, ALONG)), scene)
+        out[scene_path.stem] = (folder, mesh_scene(scene, Resolution(AROUND, ALONG), tangents=True), scene)
     return out
 
 
