@@ -129,8 +129,3 @@ def grid_deviation(surface: EvolvedSurface, t: np.ndarray, grid: np.ndarray, fam
         best[batch] = np.minimum(best[batch], exact)
         refined[batch] = True
     return Deviation(float(best.max()), float(np.percentile(best, 99)), float(best.mean()), best.size)
-
-
-def circle_grid_deviation(surface: EvolvedSurface, t: np.ndarray, grid: np.ndarray) -> Deviation:
-    """``grid_deviation`` of a circle surface's grid (K, M+1, 3)."""
-    return grid_deviation(surface, t, grid, CIRCLES)
