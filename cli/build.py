@@ -19,6 +19,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="cgamesh",
         description="Mesh the CGA evolved surfaces of a scene file and export them.",
+        epilog="other commands: cgamesh render | verify | check | view (see cgamesh COMMAND --help)",
     )
     parser.add_argument("scene", help="the YAML scene file (format version 1)")
     parser.add_argument("-o", "--output", required=True, action="append",
