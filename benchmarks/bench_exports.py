@@ -15,13 +15,14 @@ import argparse
 import os
 import sys
 import tempfile
-import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from timing import best_of  # noqa: E402 (this script's folder is on sys.path)
 
 from cgamesh.export.gltf import write_glb  # noqa: E402
 from cgamesh.export.usd import write_usd  # noqa: E402
@@ -32,15 +33,6 @@ from cgamesh.readback import read_gltf  # noqa: E402
 from cgamesh.scene import load_scene  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-
-
-def best_of(repeats: int, work) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        work()
-        times.append(time.perf_counter() - start)
-    return min(times)
 
 
 def main() -> None:
@@ -61,7 +53,7 @@ def main() -> None:
         for name, path, write in (("GLB", folder / "t.glb", write_glb), ("USDC", folder / "t.usdc", write_usd),
                                   ("USDZ", folder / "t.usdz", write_usd)):
             write(path, surfaces, **common)  # warm: imports, allocations
-            results[name] = best_of(args.repeats, lambda: write(path, surfaces, **common))
+            results[name] = best_of(args.repeats, lambda: write(path, surfaces, **common))[0]
             results[name + " bytes"] = path.stat().st_size
         raw = np.zeros(results["GLB bytes"], np.uint8)
 
@@ -71,7 +63,7 @@ def main() -> None:
                 f.flush()
                 os.fsync(f.fileno())
 
-        floor = best_of(args.repeats, raw_write)
+        floor = best_of(args.repeats, raw_write)[0]
         _check(folder, mesh)
 
     glb = results["GLB"] / vertices * 1e6

@@ -20,10 +20,11 @@ for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")  # before numpy loads BLAS
 
 import argparse  # noqa: E402
-import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+
+from timing import best_of  # noqa: E402 (this script's folder is on sys.path)
 
 from cgamesh.pipeline import build_surface  # noqa: E402
 from cgamesh.ribbons import PairRings, mesh_ribbon_surface  # noqa: E402
@@ -61,15 +62,6 @@ def euclidean_strip(around: int, along: int, turns: float = 2.0, length: float =
     faces[..., 0, 0], faces[..., 0, 1], faces[..., 0, 2] = corner, corner + 1, corner + around
     faces[..., 1, 0], faces[..., 1, 1], faces[..., 1, 2] = corner + 1, corner + around + 1, corner + around
     return positions.reshape(-1, 3), normals.reshape(-1, 3), uvs.reshape(-1, 2), faces.reshape(-1, 3)
-
-
-def best_of(repeat: int, run) -> tuple[float, object]:
-    best, result = np.inf, None
-    for _ in range(repeat):
-        start = time.perf_counter()
-        result = run()
-        best = min(best, time.perf_counter() - start)
-    return best, result
 
 
 def check(mesh, surface, size: int) -> None:

@@ -21,6 +21,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from euclidean_tube import euclidean_tube  # noqa: E402
+from timing import best_of  # noqa: E402
 
 from cgamesh.export.gltf import write_glb  # noqa: E402
 from cgamesh.material import Material  # noqa: E402
@@ -30,16 +31,6 @@ from cgamesh.scene import load_scene  # noqa: E402
 from cgamesh.surface import CircleRings  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-
-
-def best_of(repeats: int, work) -> tuple[float, object]:
-    """Shortest wall time of ``repeats`` runs, and the last result."""
-    times, result = [], None
-    for _ in range(repeats):
-        start = time.perf_counter()
-        result = work()
-        times.append(time.perf_counter() - start)
-    return min(times), result
 
 
 def check_on_circles(surface, mesh, around: int, along: int) -> float:
