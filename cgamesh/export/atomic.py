@@ -34,20 +34,13 @@ def atomic_write(path: str | os.PathLike[str]) -> Iterator[BinaryIO]:
     """
     target = Path(path)
     tmp, fd = _create_temp_beside(target)
-    try:
+    with _replacing(tmp, target):
         with os.fdopen(fd, "wb") as f:
             yield f
             f.flush()
             # Without fsync the rename can reach the disk before the data does, and a crash
             # would leave an empty or partial file under the final name.
             os.fsync(f.fileno())
-        os.replace(tmp, target)
-    except BaseException as exc:
-        _remove_quietly(tmp)
-        if isinstance(exc, OSError):
-            raise ExportError(f"cannot write {target}: {_reason(exc, target)}") from exc
-        raise
-    _fsync_directory(target.parent)
 
 
 @contextmanager
@@ -100,7 +93,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     target = Path(path)
     tmp, fd = _create_temp_beside(target, suffix=target.suffix)
     os.close(fd)
-    try:
+    with _replacing(tmp, target):
         yield tmp
         if not tmp.is_file() or tmp.stat().st_size == 0:
             raise ExportError(f"cannot write {target}: nothing was written")
@@ -109,6 +102,14 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
             os.fsync(fd)
         finally:
             os.close(fd)
+
+
+@contextmanager
+def _replacing(tmp: Path, target: Path) -> Iterator[None]:
+    """Rename ``tmp`` onto ``target`` when the block succeeds; on any failure remove ``tmp``
+    (leaving ``target`` untouched) and turn an OSError into a one-line ExportError."""
+    try:
+        yield
         os.replace(tmp, target)
     except BaseException as exc:
         _remove_quietly(tmp)
