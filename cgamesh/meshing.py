@@ -52,7 +52,7 @@ def transported_frames(normal: np.ndarray, closed: bool, t: np.ndarray) -> tuple
     steps = np.concatenate(
         [rotors.rotation_between(E3, normal[:1]), rotors.rotation_between(normal[:-1], normal[1:])]
     )
-    accumulated = rotors.prefix_products(steps, rotors.EUCLIDEAN_ROTOR_GRADES)
+    accumulated = rotors.prefix_products(steps, rotors.EUCLIDEAN_ROTOR_BLADES, unit=True)
     u = rotors.apply_to_euclidean(accumulated, np.broadcast_to(E1, normal.shape))
     u -= np.einsum("ki,ki->k", u, normal)[:, None] * normal
     u /= np.linalg.norm(u, axis=1, keepdims=True)
@@ -277,9 +277,9 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
     ``along`` evenly spaced ones. Each ring carries around + 1 vertices (the UV seam column
     repeats the first one). ``with_tangents``: also the analytic tangents (for normal maps).
     """
-    surface.check_projection_exists()
     if t is None:
         t = np.linspace(0.0, surface.segment_count, along)
+    surface.check_projection_exists(sampled=t)
     along = len(t)
     rings = CircleRings.from_projection(surface.sample(t), surface.frame)
     u, v = transported_frames(rings.normal, closed, t)

@@ -81,9 +81,29 @@ def project(interpolant: np.ndarray, derivative: np.ndarray, grade: int, size: n
     derivatives = products.geometric(d_projector, interpolant, (0, 4), g_, g_) + products.geometric(
         projector, derivative, (0, 4), g_, g_
     )
-    scale = np.square(size)
-    margin = np.nan_to_num(np.minimum(beta, g) / scale, nan=-1.0)
-    return Projection(blades, derivatives, margin)
+    return Projection(blades, derivatives, _margin(beta, g, size))
+
+
+def margin(interpolant: np.ndarray, grade: int, size: np.ndarray, scalar: bool = False) -> np.ndarray:
+    """The ``Projection.margin`` (A,) of ``project``, or of ``project_scalar`` when ``scalar``,
+    without the projection itself: for dense scans."""
+    g_ = (grade,)
+    grades_out = (0,) if scalar else (0, 4)
+    sigma = -products.geometric(interpolant, products.reverse(interpolant), g_, g_, grades_out)
+    s = sigma[:, 0]
+    if scalar:
+        return np.nan_to_num(s / np.square(size), nan=-1.0)
+    four = sigma * _FOUR_VECTOR
+    q = products.geometric(four, four, (4,), (4,), (0,))[:, 0]
+    with np.errstate(invalid="ignore"):
+        beta = np.sqrt(s * s - q)
+    return _margin(beta, s + beta, size)
+
+
+def _margin(beta: np.ndarray, g: np.ndarray, size: np.ndarray) -> np.ndarray:
+    """min(beta, g) relative to |X'|^2, and -1 where it is NaN (no real square root)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.nan_to_num(np.minimum(beta, g) / np.square(size), nan=-1.0)
 
 
 def four_vector_free(controls: np.ndarray, grade: int, rtol: float = FOUR_VECTOR_RTOL) -> bool:
@@ -116,5 +136,4 @@ def project_scalar(interpolant: np.ndarray, derivative: np.ndarray, grade: int,
         root = np.sqrt(s)
         blades = interpolant / root[:, None]
         derivatives = (derivative - blades * (0.5 * ds / root)[:, None]) / root[:, None]
-    margin = np.nan_to_num(s / np.square(size), nan=-1.0)
-    return Projection(blades, derivatives, margin)
+    return Projection(blades, derivatives, np.nan_to_num(s / np.square(size), nan=-1.0))

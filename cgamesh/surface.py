@@ -16,12 +16,13 @@ from typing import Protocol
 import numpy as np
 
 from cgamesh.algebra import products
-from cgamesh.algebra.conformal import EUCLIDEAN, up, weight
+from cgamesh.algebra.conformal import up
+from cgamesh.algebra.layout import grade_indices
 from cgamesh.curves import CurveBasis
 from cgamesh.errors import DegenerateGeometryError
 from cgamesh.frame import LocalFrame
 from cgamesh.objects import circle_euclidean
-from cgamesh.projection import Projection, four_vector_free, project, project_scalar
+from cgamesh.projection import Projection, four_vector_free, margin, project, project_scalar
 
 # The projection is refused where min(beta, g) falls below this fraction of |C'|^2: there
 # S grows like 1/sqrt(margin) and the object heads for a line, a point or nothing at all.
@@ -68,10 +69,21 @@ class EvolvedSurface:
         self._refuse_small_margin(t, projection.margin)
         return projection
 
-    def check_projection_exists(self) -> None:
-        """Scan the whole curve densely and raise where the projection vanishes."""
+    def check_projection_exists(self, sampled: np.ndarray | None = None) -> None:
+        """Scan the whole curve densely and raise where the projection vanishes.
+
+        sampled: increasing parameters that the caller passes to ``sample`` (which refuses
+        them itself) from 0 to the end; where no step between them is longer than the scan's,
+        the scan would see nothing they do not, and is skipped.
+        """
+        step = 1.0 / SCAN_SAMPLES_PER_SEGMENT
+        if (sampled is not None and len(sampled) > 1 and sampled[0] <= 0.0
+                and sampled[-1] >= self.segment_count and np.max(np.diff(sampled)) <= step):
+            return
         t = np.linspace(0.0, self.segment_count, SCAN_SAMPLES_PER_SEGMENT * self.segment_count + 1)
-        self._refuse_small_margin(t, self._project(t).margin)
+        basis = self.curve.basis(t)
+        margins = margin(basis.value(self.controls), self.grade, basis.weight_sum(), scalar=self.four_vector_free)
+        self._refuse_small_margin(t, margins)
 
     def _refuse_small_margin(self, t: np.ndarray, margin: np.ndarray) -> None:
         bad = ~(margin >= MIN_MARGIN)
@@ -112,9 +124,18 @@ class CircleRings:
 
         X' = X . Omega (eq. 20) moves the conformal point X = up(x) without leaving C(t); its
         weight changes at the rate w' = -X' . n_inf, so the Euclidean velocity is
-        x' = X'_E - w' x (in the local frame, then scaled to world lengths).
+        x' = X'_E - w' x (in the local frame, then scaled to world lengths). X . Omega is
+        linear in X: each ring's 5 x 5 matrix is built once and applied to its S points.
         """
         local = self.frame.to_local(points)
-        moved = products.inner(up(local), self.omega[:, None, :], (1,), (2,))
-        local_velocity = moved[..., EUCLIDEAN] - weight(moved)[..., None] * local
+        moved = np.einsum("ksj,kjv->ksv", up(local)[..., _VECTORS], self._vector_map[..., _VECTORS])
+        local_velocity = moved[..., :3] - (moved[..., 4] - moved[..., 3])[..., None] * local  # weight = X5 - X4
         return self.frame.scale * local_velocity
+
+    @cached_property
+    def _vector_map(self) -> np.ndarray:
+        """(K, 5, 32): row j is e_j . Omega_k (a vector), for the vector blades e1..e5."""
+        return products.right_operator("inner", self.omega, (1,), (2,), (1,))[1]
+
+
+_VECTORS = grade_indices(1)  # e1, e2, e3 (Euclidean), e4, e5

@@ -5,7 +5,9 @@ the result is the outer product A B^T, flattened, times a fixed sign-and-placeme
 (one matrix product over the whole batch). Callers name the grades their operands carry (a
 circle is grade 3, a rotor grades 0, 2, 4), and the matrix for that pattern is built once
 and cached: a circle times a circle is a 100-column product, not 1024, with no
-per-element Python.
+per-element Python. Where an operand lives in a smaller subspace than whole grades (a
+Euclidean rotation rotor: 1, e12, e13, e23), callers may name its blades instead
+(``Blades``): a product of two such rotors is then 16 columns, not 121.
 """
 
 from __future__ import annotations
@@ -29,19 +31,35 @@ ALL_GRADES = (0, 1, 2, 3, 4, 5)
 _SIGN_TABLES = {"geometric": GEOMETRIC_SIGN, "outer": OUTER_SIGN, "inner": INNER_SIGN}
 
 
+class Blades(tuple):
+    """An explicit set of blade indices, accepted wherever a product takes grades."""
+
+
+def _selection(grades_or_blades: Sequence[int]) -> tuple[str, tuple[int, ...]]:
+    """A hashable, canonical key, tagged so that blades (1, 2) and grades (1, 2) differ."""
+    kind = "blades" if isinstance(grades_or_blades, Blades) else "grades"
+    return kind, tuple(sorted(grades_or_blades))
+
+
+def _mask(selection: tuple[str, tuple[int, ...]]) -> np.ndarray:
+    """(32,) bool: the blades a selection admits."""
+    kind, members = selection
+    return np.isin(np.arange(len(GRADES)) if kind == "blades" else GRADES, members)
+
+
 @lru_cache(maxsize=None)
 def _bilinear_map(kind: str, grades_a: tuple, grades_b: tuple, grades_out: tuple):
-    """The product restricted to operand and result grades, as a matrix.
+    """The product restricted to operand and result grades (or ``Blades``), as a matrix.
 
     Returns (blades_a, blades_b, blades_out, matrix): with A = a[..., blades_a] and
     B = b[..., blades_b], the result's blades_out coefficients are outer(A, B) @ matrix,
     where outer(A, B) is flattened row-major to (..., len(blades_a) * len(blades_b)).
     """
     signs = _SIGN_TABLES[kind]
-    blades_a = np.flatnonzero(np.isin(GRADES, grades_a))
-    blades_b = np.flatnonzero(np.isin(GRADES, grades_b))
+    blades_a = np.flatnonzero(_mask(grades_a))
+    blades_b = np.flatnonzero(_mask(grades_b))
     result = PRODUCT_INDEX[np.ix_(blades_a, blades_b)]
-    sign = signs[np.ix_(blades_a, blades_b)] * np.isin(GRADES[result], grades_out)
+    sign = signs[np.ix_(blades_a, blades_b)] * _mask(grades_out)[result]
     blades_out = np.unique(result[sign != 0.0])
     column = np.searchsorted(blades_out, result)
     matrix = np.zeros((blades_a.size * blades_b.size, max(blades_out.size, 1)))
@@ -53,7 +71,7 @@ def _bilinear_map(kind: str, grades_a: tuple, grades_b: tuple, grades_out: tuple
 
 def _product(kind, a, b, grades_a, grades_b, grades_out):
     blades_a, blades_b, blades_out, matrix = _bilinear_map(
-        kind, tuple(sorted(grades_a)), tuple(sorted(grades_b)), tuple(sorted(grades_out))
+        kind, _selection(grades_a), _selection(grades_b), _selection(grades_out)
     )
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
@@ -65,6 +83,25 @@ def _product(kind, a, b, grades_a, grades_b, grades_out):
         pairs = (left * right).reshape(shape + (blades_a.size * blades_b.size,))
         out[..., blades_out] = pairs @ matrix
     return out
+
+
+def right_operator(kind: str, b, grades_a: Sequence[int], grades_b: Sequence[int] = ALL_GRADES,
+                   grades_out: Sequence[int] = ALL_GRADES) -> tuple[np.ndarray, np.ndarray]:
+    """The linear map a -> a (kind) b for fixed b (..., 32), as (blades_a, matrix (..., A, 32)).
+
+    Row i of the matrix is the product of the i-th blade admitted by ``grades_a`` with b, so
+    for many a per b, a[..., blades_a] @ matrix gives the products: one small matrix product
+    per b instead of a pairwise product per a. ``kind``: "geometric", "outer" or "inner".
+    """
+    blades_a, blades_b, blades_out, matrix = _bilinear_map(
+        kind, _selection(grades_a), _selection(grades_b), _selection(grades_out)
+    )
+    b = np.asarray(b, dtype=np.float64)
+    per_b = matrix.reshape(blades_a.size, blades_b.size, -1).transpose(1, 0, 2).reshape(blades_b.size, -1)
+    out = np.zeros(b.shape[:-1] + (blades_a.size, BLADE_COUNT))
+    if blades_out.size:
+        out[..., blades_out] = (b[..., blades_b] @ per_b).reshape(b.shape[:-1] + (blades_a.size, blades_out.size))
+    return blades_a, out
 
 
 def geometric(a, b, grades_a: Sequence[int] = ALL_GRADES, grades_b: Sequence[int] = ALL_GRADES,

@@ -18,7 +18,8 @@ from cgamesh.algebra.layout import BLADE_COUNT, blade_index, grade_indices
 _E12, _E13, _E23 = blade_index("e12"), blade_index("e13"), blade_index("e23")
 _VECTORS = grade_indices(1)
 _ROTOR_GRADES = (0, 2, 4)
-EUCLIDEAN_ROTOR_GRADES = (0, 2)
+# A rotation of Euclidean space has only these blades: products of such rotors stay in them.
+EUCLIDEAN_ROTOR_BLADES = products.Blades(blade_index(name) for name in ("1", "e12", "e13", "e23"))
 _E0 = products.outer(N_INF, N_0, (1,), (1,))  # n_inf ^ n_0 (= e4 e5 = e45)
 
 
@@ -81,27 +82,31 @@ def renormalise(rotor: np.ndarray, grades: tuple[int, ...] = _ROTOR_GRADES) -> n
     return rotor / np.sqrt(norm_sq)[..., None]
 
 
-def prefix_products(rotors: np.ndarray, grades: tuple[int, ...] = _ROTOR_GRADES) -> np.ndarray:
+def prefix_products(rotors: np.ndarray, grades: tuple[int, ...] = _ROTOR_GRADES, unit: bool = False) -> np.ndarray:
     """Inclusive products P_k = R_k R_{k-1} ... R_0 of rotors (K, 32), later factors on the left.
 
     A log-depth scan (Hillis-Steele): about log2(K) batched products instead of K sequential
     ones, and each result carries the rounding of only log2(K) products. ``grades``: the
-    grades the rotors and their products carry ((0, 2) for Euclidean rotations).
+    grades (or ``products.Blades``) the rotors and their products carry
+    (``EUCLIDEAN_ROTOR_BLADES`` for rotations of Euclidean space). Products of versors that
+    scale are renormalised at every level, so their size stays bounded; ``unit`` rotors
+    (R ~R = 1) stay unit to rounding and are renormalised once, at the end.
     """
     acc = np.array(rotors, dtype=np.float64)
     shift = 1
     while shift < len(acc):
         acc[shift:] = products.geometric(acc[shift:], acc[:-shift], grades, grades, grades)
-        acc = renormalise(acc, grades)
+        if not unit:
+            acc = renormalise(acc, grades)
         shift *= 2
-    return acc
+    return renormalise(acc, grades) if unit else acc
 
 
 def apply_to_euclidean(rotor: np.ndarray, x: np.ndarray) -> np.ndarray:
     """R x ~R for Euclidean rotation rotors (..., 32) (grades 0, 2) and vectors (..., 3)."""
     moved = products.geometric(
-        products.geometric(rotor, vector(x), EUCLIDEAN_ROTOR_GRADES, (1,), (1, 3)), products.reverse(rotor),
-        (1, 3), EUCLIDEAN_ROTOR_GRADES, (1,),
+        products.geometric(rotor, vector(x), EUCLIDEAN_ROTOR_BLADES, (1,), (1, 3)), products.reverse(rotor),
+        (1, 3), EUCLIDEAN_ROTOR_BLADES, (1,),
     )
     return moved[..., EUCLIDEAN]
 

@@ -28,6 +28,10 @@ class CurveBasis:
         derivative = np.einsum("ak,akm->am", self.derivatives, picked)
         return value, derivative
 
+    def value(self, controls: np.ndarray) -> np.ndarray:
+        """C'(t) (A, 32) alone, for controls (n, 32)."""
+        return np.einsum("ak,akm->am", self.weights, controls[self.indices])
+
     def weight_sum(self) -> np.ndarray:
         """(A,) sum of |weights|: C' has at most this size for unit controls."""
         return np.abs(self.weights).sum(axis=1)
