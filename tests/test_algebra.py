@@ -64,6 +64,37 @@ def test_grade_restricted_geometric_product_equals_cliffords_grade_selection(
     assert _close(products.geometric(a, b, grades_a, grades_b, grades_out), np.array(want))
 
 
+def test_products_restricted_to_named_blades_equal_cliffords(oracle, rng):
+    # Euclidean rotors live on the blades 1, e12, e13, e23: their product, restricted to
+    # those blades, is the whole product.
+    blades = rotors.EUCLIDEAN_ROTOR_BLADES
+    a = rotors.rotation_between(_unit(rng.standard_normal((BATCH, 3))), _unit(rng.standard_normal((BATCH, 3))))
+    b = rotors.rotation_between(_unit(rng.standard_normal((BATCH, 3))), _unit(rng.standard_normal((BATCH, 3))))
+    want = np.array([(oracle.mv(x) * oracle.mv(y)).value for x, y in zip(a, b)])
+    assert _close(products.geometric(a, b, blades, blades, blades), want)
+
+
+def test_named_blades_and_grades_with_the_same_numbers_differ(multivectors):
+    # Blades (1, 2) are e1 and e2; grades (1, 2) are every vector and bivector.
+    a, b = multivectors
+    by_blades = products.geometric(a, b, products.Blades((1, 2)), products.Blades((1, 2)))
+    by_grades = products.geometric(a, b, (1, 2), (1, 2))
+    kept = np.zeros(32)
+    kept[[1, 2]] = 1.0
+    assert _close(by_blades, products.geometric(a * kept, b * kept))
+    assert not _close(by_blades, by_grades)
+
+
+@pytest.mark.parametrize("kind", ["geometric", "outer", "inner"])
+def test_right_operator_rows_applied_to_a_equal_the_product(oracle, multivectors, kind):
+    a, b = multivectors
+    a = np.where(GRADES == 1, a, 0.0)
+    blades_a, matrix = products.right_operator(kind, b, (1,))
+    symbol = {"geometric": lambda x, y: x * y, "outer": lambda x, y: x ^ y, "inner": lambda x, y: x | y}[kind]
+    want = np.array([symbol(oracle.mv(x), oracle.mv(y)).value for x, y in zip(a, b)])
+    assert _close(np.einsum("ki,kio->ko", a[:, blades_a], matrix), want)
+
+
 def test_reverse_equals_cliffords(oracle, multivectors):
     a = multivectors[0]
     assert _close(products.reverse(a), np.array([(~oracle.mv(x)).value for x in a]))

@@ -12,7 +12,7 @@ from cgamesh.curves.linear import Linear
 from cgamesh.errors import DegenerateGeometryError
 from cgamesh.frame import LocalFrame
 from cgamesh.pipeline import build_surface
-from cgamesh.projection import project, project_scalar
+from cgamesh.projection import margin, project, project_scalar
 from cgamesh.scene import parse_scene
 from cgamesh.surface import EvolvedSurface
 
@@ -177,6 +177,31 @@ def test_check_projection_exists_names_the_surface_and_alpha():
         surface.check_projection_exists()
     message = str(caught.value)
     assert "opposite_pair" in message and "alpha = 0.5" in message and "\n" not in message
+
+
+@pytest.mark.parametrize("kind", ["circles", "pairs"])
+def test_margin_alone_equals_the_projections_margin(kind):
+    surface = _surface("kb", 3 if kind == "circles" else 2)
+    basis = surface.curve.basis(np.linspace(0.0, surface.segment_count, 97))
+    interpolant, derivative = basis.evaluate(surface.controls)
+    size = basis.weight_sum()
+    assert np.array_equal(margin(interpolant, surface.grade, size),
+                          project(interpolant, derivative, surface.grade, size).margin)
+    if kind == "pairs":
+        assert np.array_equal(margin(interpolant, surface.grade, size, scalar=True),
+                              project_scalar(interpolant, derivative, surface.grade, size).margin)
+
+
+def test_the_scan_is_skipped_only_where_rings_are_as_dense_as_it():
+    surface = build_surface(parse_scene(OPPOSITE, "opposite.yaml").surfaces[0])
+    # Coarse rings step over alpha = 0.5: the scan still finds it.
+    with pytest.raises(DegenerateGeometryError, match="alpha = 0.5"):
+        surface.check_projection_exists(sampled=np.linspace(0.0, 1.0, 4))
+    # Rings denser than the scan leave it nothing to add; sampling them refuses alpha = 0.5.
+    dense = np.linspace(0.0, 1.0, 257)
+    surface.check_projection_exists(sampled=dense)
+    with pytest.raises(DegenerateGeometryError, match="alpha = 0.5"):
+        surface.sample(dense)
 
 
 def test_sample_refuses_where_the_projection_vanishes():
