@@ -31,7 +31,8 @@ class SurfaceMesh:
                 this frame; v as stored here, before any exporter's V flip).
     uv_lengths: (V, 2) float64 file-unit lengths that one unit of u and of v spans at each vertex
                 (a tube: its circumference averaged along it, and its length; a cap: its
-                diameter both ways): the natural-UV stage (uv.py) scales by them.
+                diameter both ways): the natural-UV stage (uv.py) scales by them. May be a
+                read-only broadcast view (a tube's grid has one pair of lengths).
     weld:       (V,) integer index of the first vertex at the bit-identical position (weld[i] <= i;
                 seams and cap rims repeat vertices): exporters that weld points use it.
     """

@@ -200,6 +200,15 @@ def _frame_values(frame: np.ndarray, theta: np.ndarray, speed: np.ndarray) -> np
     return values
 
 
+def _apply_signs(normals: np.ndarray, signs: np.ndarray) -> None:
+    """normals (K, M, 3) *= signs (K, 1) or (K, M), touching only rings with a negative sign."""
+    flipped = np.flatnonzero((signs < 0.0).any(axis=1))
+    if flipped.size == len(normals) and signs.shape[1] == 1:  # the whole field turned outward
+        np.negative(normals, out=normals)
+    elif flipped.size:
+        normals[flipped] *= np.broadcast_to(signs, normals.shape[:2])[flipped][..., None]
+
+
 def grid_faces(rings: int, columns: int, signs: np.ndarray) -> np.ndarray:
     """Triangles (2 (rings-1)(columns-1), 3) int32 of a (rings, columns) vertex grid.
 
@@ -217,21 +226,32 @@ def grid_faces(rings: int, columns: int, signs: np.ndarray) -> np.ndarray:
         here, right, below, across = signs[:-1, :-1], signs[:-1, 1:], signs[1:, :-1], signs[1:, 1:]
         flipped = np.stack([here + right + below < 0.0, right + across + below < 0.0], axis=2)
         majority_flipped = 2 * np.count_nonzero(flipped) > flipped.size
-    second, third = (2, 1) if majority_flipped else (1, 2)
-    corner = (np.arange(rings - 1, dtype=np.int32)[:, None] * columns
-              + np.arange(columns - 1, dtype=np.int32)[None, :])
-    faces = np.empty((rings - 1, columns - 1, 2, 3), dtype=np.int32)
-    faces[:, :, 0, 0] = corner
-    faces[:, :, 0, second] = corner + 1
-    faces[:, :, 0, third] = corner + columns
-    faces[:, :, 1, 0] = corner + 1
-    faces[:, :, 1, second] = corner + columns + 1
-    faces[:, :, 1, third] = corner + columns
+    faces = _wound_grid(rings, columns, flip=majority_flipped)
     if flipped is not None:
         minority = ~flipped if majority_flipped else flipped
         if np.any(minority):
             faces[minority] = faces[minority][:, [0, 2, 1]]
     return faces.reshape(-1, 3)
+
+
+def _wound_grid(rings: int, columns: int, flip: bool) -> np.ndarray:
+    """Triangles (rings-1, columns-1, 2, 3) int32 of a vertex grid, all wound one way.
+
+    One ring's triangles are written once; every other ring is that row plus the ring's
+    first index, a single contiguous pass over the output (the bulk of a mesh's bytes).
+    """
+    second, third = (2, 1) if flip else (1, 2)
+    j = np.arange(columns - 1, dtype=np.int32)
+    row = np.empty((columns - 1, 2, 3), dtype=np.int32)
+    row[:, 0, 0] = j
+    row[:, 0, second] = j + 1
+    row[:, 0, third] = j + columns
+    row[:, 1, 0] = j + 1
+    row[:, 1, second] = j + columns + 1
+    row[:, 1, third] = j + columns
+    faces = np.empty((rings - 1, (columns - 1) * 6), dtype=np.int32)
+    np.add(row.reshape(1, -1), np.arange(rings - 1, dtype=np.int32)[:, None] * np.int32(columns), out=faces)
+    return faces.reshape(rings - 1, columns - 1, 2, 3)
 
 
 def orient_by_geometry(faces: np.ndarray, positions: np.ndarray, normals: np.ndarray,
@@ -291,19 +311,11 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
     positions = normal_field.expand(placement, circle_basis)
 
     basis = normal_field.trig_basis(theta)
-    raw = normal_field.expand(field.raw, basis)
-    size = np.sqrt(raw[..., 0] ** 2 + raw[..., 1] ** 2 + raw[..., 2] ** 2)
-    zero = size <= normal_field.ZERO_FRACTION * field.speed[:, None]
-    if np.any(zero):  # the limit along the circle, N ~ (theta - theta0) dN/dtheta
-        ring, column = np.nonzero(zero)
-        raw[ring, column] = np.einsum("za,zac->zc", normal_field.trig_basis_derivative(theta[column]),
-                                      field.raw[ring])
-        size[ring, column] = np.linalg.norm(raw[ring, column], axis=-1)
+    normals, size, near_zero = normal_field.unit_normals(field.raw, theta, field.speed, NEAR_ZERO_FRACTION)
     signs, turning = _continuous_signs(surface, t, u, field, theta, size)
     if _outward_sum(field, basis, size, signs, rings.radius) < 0.0:
         signs = -signs
-    raw *= (signs / size)[..., None]
-    normals = raw
+    _apply_signs(normals, signs)
     # Tangent along +u: the circle's own tangent n x e_r = d x / d theta. The normal is
     # signs * (n x e_r) x x' / |.|, so (normal x tangent) . d x / d t has the sign of ``signs``:
     # w = signs makes the bitangent point along +v (v grows with t).
@@ -334,14 +346,13 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
         faces = orient_by_geometry(faces, positions, normals, np.repeat(strip, 2 * around))
     if tangents is not None:
         tangents = tangents.reshape(-1, 4)
-    suspects = (size <= NEAR_ZERO_FRACTION * field.speed[:, None]).ravel()
-    faces = drop_zero_area(positions, faces, suspects)
+    faces = drop_zero_area(positions, faces, near_zero.ravel())
     travelled = uv_map.along_lengths(field.samples)
     uvs = uv_map.grid_uvs(uv_map.normalised(travelled), columns)
     circumference = uv_map.mean_along(2.0 * np.pi * rings.radius, travelled)
-    uv_lengths = np.empty((len(positions), 2))
-    uv_lengths[:, 0] = circumference
-    uv_lengths[:, 1] = travelled[-1] if travelled[-1] > 0.0 else circumference
+    # The same two lengths at every grid vertex: a read-only view, not 16 bytes per vertex.
+    uv_lengths = np.broadcast_to([circumference, travelled[-1] if travelled[-1] > 0.0 else circumference],
+                                 (len(positions), 2))
     weld = _grid_weld(along, around, closed)
 
     if caps:
@@ -359,7 +370,7 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
 def _grid_weld(along: int, around: int, closed: bool) -> np.ndarray:
     """weld (along * (around + 1),): the seam column onto column 0, a closed loop's last ring onto ring 0."""
     columns = around + 1
-    grid = np.arange(along * columns, dtype=np.int64).reshape(along, columns)
+    grid = np.arange(along * columns, dtype=np.int32).reshape(along, columns)
     grid[:, -1] = grid[:, 0]
     if closed:
         grid[-1] = grid[0]

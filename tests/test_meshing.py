@@ -489,3 +489,27 @@ def test_fold_case_really_folds(oracle):
     rings = CircleRings.from_projection(surface.sample(np.array([1.5, 1.52])), surface.frame)
     gap = np.linalg.norm(rings.centre[1] - rings.centre[0])
     assert gap < rings.radius.sum() and gap > abs(rings.radius[1] - rings.radius[0])
+
+
+def test_unit_normals_equal_the_normalised_expansion_and_take_the_limit_at_a_zero(rng):
+    from cgamesh import normals as normal_field
+
+    theta = 2.0 * np.pi * np.arange(257) / 256
+    coefficients = rng.standard_normal((70, 7, 3))  # more rings than one block holds
+    coefficients[:, 0] += 4.0 * np.sign(coefficients[:, 0])  # well away from zero
+    # Ring 5: N = (sin t, 1 - cos t, 0) vanishes at t = 0 with dN/dt = (1, 0, 0).
+    coefficients[5] = 0.0
+    coefficients[5, 2, 0] = 1.0  # sin t
+    coefficients[5, 0, 1], coefficients[5, 1, 1] = 1.0, -1.0  # 1 - cos t
+    speed = np.full(70, 2.0)
+    unit, size, near = normal_field.unit_normals(coefficients, theta, speed, 1e-6)
+
+    raw = normal_field.expand(coefficients, normal_field.trig_basis(theta))
+    length = np.linalg.norm(raw, axis=-1)
+    away = length > 1e-8  # all but ring 5 at t = 0 and t = 2 pi
+    assert np.count_nonzero(~away) == 2
+    np.testing.assert_allclose(size[away], length[away], rtol=1e-14)
+    np.testing.assert_allclose(unit[away], (raw / np.where(away, length, 1.0)[..., None])[away], rtol=0, atol=1e-14)
+    assert np.array_equal(near, ~away)
+    np.testing.assert_allclose(unit[5, [0, -1]], [[1.0, 0.0, 0.0]] * 2, atol=1e-15)
+    np.testing.assert_allclose(size[5, [0, -1]], 1.0, rtol=1e-15)
