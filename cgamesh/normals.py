@@ -30,6 +30,9 @@ ZERO_FRACTION = 1e-8
 # A reversal of (zeta, rho) is a fold when the sine of the angle between its derivatives
 # along theta and along t, where it comes closest to zero, is below this (0 on a fold).
 FOLD_SINE = 1e-2
+# A zero whose derivative along t is below this fraction of its derivative along theta does
+# not move with t (``fold_sines``).
+STILL_FRACTION = 1e-6
 
 
 def trig_basis(theta: np.ndarray) -> np.ndarray:
@@ -171,8 +174,13 @@ def fold_sines(at: np.ndarray, before: np.ndarray, after: np.ndarray, dt: np.nda
     along_theta = np.einsum("za,zac->zc", trig_basis_derivative(closest), at)
     along_t = (np.einsum("za,zac->zc", basis, after) - np.einsum("za,zac->zc", basis, before)) / dt[:, None]
     det = along_theta[:, 0] * along_t[:, 1] - along_theta[:, 1] * along_t[:, 0]
-    lengths = np.linalg.norm(along_theta, axis=1) * np.linalg.norm(along_t, axis=1)
-    return np.abs(det) / np.maximum(lengths, np.finfo(float).tiny)
+    theta_length, t_length = np.linalg.norm(along_theta, axis=1), np.linalg.norm(along_t, axis=1)
+    sine = np.abs(det) / np.maximum(theta_length * t_length, np.finfo(float).tiny)
+    # Where every circle passes through the same point at the same angle (a characteristic
+    # point on a column), the zero does not move with t: the derivative along t is rounding
+    # noise of no direction. The field is lambda d with lambda changing sign across the line
+    # theta = theta0, a fold of the parametrisation: sine 0.
+    return np.where(t_length <= STILL_FRACTION * theta_length, 0.0, sine)
 
 
 def unit_rows(values: np.ndarray) -> np.ndarray:

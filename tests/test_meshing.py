@@ -491,6 +491,27 @@ def test_fold_case_really_folds(oracle):
     assert gap < rings.radius.sum() and gap > abs(rings.radius[1] - rings.radius[0])
 
 
+@pytest.mark.parametrize("around", [64, 63], ids=["both-on-columns", "one-on-a-column"])
+def test_a_vertex_exactly_on_a_characteristic_point_takes_the_limit_along_its_circle(around):
+    # The first circle lies in the xy plane, so its ring starts at u = e1: column 0 sits on
+    # A = (1, 0, 0), which every interpolated circle passes through (as does B = -A). There
+    # X . (C dC/dalpha) = 0 and the raw normal is 0/0; the vertex takes the limit along its
+    # circle. With an even count B = -A sits on a column too. Both controls are great circles
+    # of the unit sphere, and so is every circle between them: every normal, those at A and B
+    # included, is the sphere's outward normal.
+    text = _scene("linear", [_circle([0, 0, 0], [0, 0, 1], 1.0),
+                             _through([[1, 0, 0], [0, 0.6, 0.8], [-1, 0, 0]])], name="pencil")
+    mesh = mesh_circle_surface(build_surface(parse_scene(text, "pencil.yaml").surfaces[0]), around, 9)
+    assert np.abs(mesh.positions[0] - [1.0, 0.0, 0.0]).max() <= 1e-15
+    assert np.all(np.isfinite(mesh.normals)) and np.abs(np.linalg.norm(mesh.normals, axis=1) - 1.0).max() <= 1e-12
+    assert _angles_degrees(mesh.normals, mesh.positions).max() <= NORMAL_DEGREES
+    # Every ring meets at A (and B): the triangles collapsed there are dropped, the rest wind
+    # counter-clockwise seen from their normals.
+    geometric = _face_normals(mesh.positions, mesh.faces)
+    assert np.linalg.norm(geometric, axis=1).min() > 1e-12
+    assert np.einsum("fi,fvi->fv", geometric, mesh.normals[mesh.faces]).min() > 0.0
+
+
 def test_unit_normals_equal_the_normalised_expansion_and_take_the_limit_at_a_zero(rng):
     from cgamesh import normals as normal_field
 
