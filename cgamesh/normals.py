@@ -72,7 +72,7 @@ def sample_points(centre, radius, u, v) -> tuple[np.ndarray, np.ndarray]:
 
 def fit(samples: np.ndarray) -> np.ndarray:
     """Trigonometric coefficients (K, 7, C) of functions sampled at SAMPLE_ANGLES (K, 7, C)."""
-    return np.einsum("as,ksc->kac", _FIT, samples)
+    return _FIT @ samples
 
 
 def frame_coordinates(velocity: np.ndarray, radial: np.ndarray, normal: np.ndarray) -> np.ndarray:

@@ -128,7 +128,7 @@ class CircleRings:
         linear in X: each ring's 5 x 5 matrix is built once and applied to its S points.
         """
         local = self.frame.to_local(points)
-        moved = np.einsum("ksj,kjv->ksv", up(local)[..., _VECTORS], self._vector_map[..., _VECTORS])
+        moved = up(local)[..., _VECTORS] @ self._vector_map[..., _VECTORS]
         local_velocity = moved[..., :3] - (moved[..., 4] - moved[..., 3])[..., None] * local  # weight = X5 - X4
         return self.frame.scale * local_velocity
 
