@@ -125,7 +125,7 @@ def _ring_normals(surface: EvolvedSurface, t: np.ndarray, rings: CircleRings, u:
 
 
 def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, u: np.ndarray, field: RingNormals,
-                      theta: np.ndarray, size: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                      theta: np.ndarray, smallest: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Signs (K, M) making the normal field continuous over the whole (t, theta) grid, and
     which rings (K,) bool were examined vertex by vertex (their field may turn fast).
 
@@ -136,9 +136,9 @@ def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, u: np.ndarray, fie
     compared (at the seven sample angles, or at every column where a ring has a reversal) and
     a ring is flipped when its normals are all but opposite to its predecessor's.
     """
-    rings, columns = size.shape
+    rings, columns = len(smallest), len(theta)
     step = theta[1] - theta[0]
-    suspicious = size.min(axis=1) <= normal_field.derivative_bound(field.raw) * step
+    suspicious = smallest <= normal_field.derivative_bound(field.raw) * step
     signs = np.ones((rings, columns if np.any(suspicious) else 1))
     agreement = np.einsum("ksc,ksc->k", normal_field.unit_rows(field.sample_normals[:-1]),
                           normal_field.unit_rows(field.sample_normals[1:])) / field.sample_normals.shape[1]
@@ -169,24 +169,23 @@ def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, u: np.ndarray, fie
     return signs * (1.0 - 2.0 * ring_parity)[:, None], suspicious
 
 
-def _outward_sum(field: RingNormals, basis: np.ndarray, size: np.ndarray, signs: np.ndarray,
-                 radius: np.ndarray) -> float:
-    """Sum over vertices of n . (x - centre) = s r zeta / |N|: positive when the field points out.
+def _outward_sum(field: RingNormals, signs: np.ndarray, rings: CircleRings, positions: np.ndarray,
+                 normals: np.ndarray) -> float:
+    """Sum over vertices of s n . (x - centre) = s r zeta / |N|: positive when the field points out.
 
-    With one sign per ring, the seven sample angles estimate each ring's mean of zeta / |N| (a
-    cosine); only when that estimate is too near zero to trust its sign (mean |cosine| under
-    OUTWARD_TRUST) is the sum taken over every vertex.
+    normals: the unit field before the signs (K, 1 or M) are applied. With one sign per ring,
+    the seven sample angles estimate each ring's mean of zeta / |N| (a cosine); only when that
+    estimate is too near zero to trust its sign (mean |cosine| under OUTWARD_TRUST) is the sum
+    taken over every vertex.
     """
     if signs.shape[1] == 1:
         cosine = field.frame[..., 0] @ normal_field.trig_basis(normal_field.SAMPLE_ANGLES).T  # zeta (K, 7)
         cosine = cosine / np.linalg.norm(field.sample_normals, axis=-1)
-        estimate = float((cosine.mean(axis=1) * signs[:, 0]) @ radius)
-        if abs(estimate) >= OUTWARD_TRUST * radius.sum():
+        estimate = float((cosine.mean(axis=1) * signs[:, 0]) @ rings.radius)
+        if abs(estimate) >= OUTWARD_TRUST * rings.radius.sum():
             return estimate
-    zeta = normal_field.expand(field.frame[..., :1], basis)[..., 0]
-    zeta /= size
-    zeta *= signs
-    return float(zeta.sum(axis=1) @ radius)
+    outward = np.einsum("kmi,kmi->km", normals, positions - rings.centre[:, None, :])
+    return float(np.sum(outward * signs))
 
 
 def _frame_values(frame: np.ndarray, theta: np.ndarray, speed: np.ndarray) -> np.ndarray:
@@ -274,10 +273,12 @@ def orient_by_geometry(faces: np.ndarray, positions: np.ndarray, normals: np.nda
 
 
 def drop_zero_area(positions: np.ndarray, faces: np.ndarray, suspects: np.ndarray) -> np.ndarray:
-    """Remove triangles of zero area among those touching suspect vertices (V,) bool."""
-    if not np.any(suspects):
+    """Remove triangles of zero area among those touching the suspect vertices (indices)."""
+    if suspects.size == 0:
         return faces
-    candidates = np.flatnonzero(suspects[faces].any(axis=1))
+    suspect = np.zeros(len(positions), dtype=bool)
+    suspect[suspects] = True
+    candidates = np.flatnonzero(suspect[faces].any(axis=1))
     if candidates.size == 0:
         return faces
     p = positions[faces[candidates]]
@@ -310,10 +311,9 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
     placement = np.stack([rings.centre, rings.radius[:, None] * u, rings.radius[:, None] * v], axis=1)
     positions = normal_field.expand(placement, circle_basis)
 
-    basis = normal_field.trig_basis(theta)
-    normals, size, near_zero = normal_field.unit_normals(field.raw, theta, field.speed, NEAR_ZERO_FRACTION)
-    signs, turning = _continuous_signs(surface, t, u, field, theta, size)
-    if _outward_sum(field, basis, size, signs, rings.radius) < 0.0:
+    normals, smallest, near_zero = normal_field.unit_normals(field.raw, theta, field.speed, NEAR_ZERO_FRACTION)
+    signs, turning = _continuous_signs(surface, t, u, field, theta, smallest)
+    if _outward_sum(field, signs, rings, positions, normals) < 0.0:
         signs = -signs
     _apply_signs(normals, signs)
     # Tangent along +u: the circle's own tangent n x e_r = d x / d theta. The normal is
@@ -324,7 +324,7 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
     if with_tangents:
         circle_tangent = normal_field.expand(np.stack([u, v], axis=1),
                                              np.stack([-np.sin(theta), np.cos(theta)], axis=1))
-        tangents = np.concatenate([circle_tangent, np.broadcast_to(signs, size.shape)[..., None]], axis=-1)
+        tangents = np.concatenate([circle_tangent, np.broadcast_to(signs, (along, around + 1))[..., None]], axis=-1)
         tangents[:, -1] = tangents[:, 0]
         if closed:
             tangents[-1] = tangents[0]
@@ -346,7 +346,7 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
         faces = orient_by_geometry(faces, positions, normals, np.repeat(strip, 2 * around))
     if tangents is not None:
         tangents = tangents.reshape(-1, 4)
-    faces = drop_zero_area(positions, faces, near_zero.ravel())
+    faces = drop_zero_area(positions, faces, near_zero[0] * columns + near_zero[1])
     travelled = uv_map.along_lengths(field.samples)
     uvs = uv_map.grid_uvs(uv_map.normalised(travelled), columns)
     circumference = uv_map.mean_along(2.0 * np.pi * rings.radius, travelled)

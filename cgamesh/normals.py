@@ -99,49 +99,61 @@ def expand(coefficients: np.ndarray, basis: np.ndarray) -> np.ndarray:
     return (coefficients.reshape(k, b * c) @ spread).reshape(k, m, c)
 
 
-def unit_normals(coefficients: np.ndarray, theta: np.ndarray, speed: np.ndarray,
-                 near_fraction: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def unit_normals(coefficients: np.ndarray, theta: np.ndarray, speed: np.ndarray, near_fraction: float
+                 ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
     """The normal field of trig coefficients (K, 7, 3) at angles theta (M,), made unit.
 
-    Returns unit (K, M, 3) = N / |N|, size (K, M) = |N|, and near (K, M) bool, where |N| is
-    at most ``near_fraction`` of the ring's speed (K,). Where N vanishes (ZERO_FRACTION of the
-    speed) its direction is the limit along the circle, N ~ (theta - theta0) dN/dtheta, and
-    size is |dN/dtheta| there. The signs that make the field continuous are applied later.
+    Returns unit (K, M, 3) = N / |N|; smallest (K,), each ring's least |N|; and near, the
+    (ring, column) indices where |N| is at most ``near_fraction`` of the ring's speed (K,).
+    Where N vanishes (ZERO_FRACTION of the speed) its direction is the limit along the
+    circle, N ~ (theta - theta0) dN/dtheta, and |dN/dtheta| counts as its size. The signs
+    that make the field continuous are applied later.
 
     Computed a block of rings at a time, one component after another (numpy's loops over
     contiguous rows are several times faster than over a last axis of 3), in scratch buffers
-    that stay within a core's cache: a mesh-sized temporary would cost more in fresh pages
+    that stay within a core's cache: mesh-sized temporaries would cost more in fresh pages
     than the arithmetic. Only the final scaling writes the interleaved (x, y, z) output.
     """
     rings, columns = coefficients.shape[0], len(theta)
     basis = np.ascontiguousarray(trig_basis(theta).T)  # (7, M)
     by_component = np.ascontiguousarray(np.moveaxis(coefficients, -1, 0))  # (3, K, 7)
     unit = np.empty((rings, columns, 3))
-    size = np.empty((rings, columns))
-    near = np.empty((rings, columns), dtype=bool)
+    smallest = np.empty(rings)
+    near_rings, near_columns = [], []
     block = max(1, _SCRATCH_VALUES // (3 * columns))
-    planes, square, inverse = np.empty((3, block, columns)), np.empty((block, columns)), np.empty((block, columns))
+    planes, squares, scratch = np.empty((3, block, columns)), np.empty((3, block, columns)), np.empty((block, columns))
     for start in range(0, rings, block):
         stop = min(rings, start + block)
         count = stop - start
-        values, lengths, scratch = planes[:, :count], size[start:stop], square[:count]
+        values, lengths = planes[:, :count], scratch[:count]
         for component in range(3):
             np.matmul(by_component[component, start:stop], basis, out=values[component])
-        np.multiply(values[0], values[0], out=lengths)
-        for component in (1, 2):
-            lengths += np.multiply(values[component], values[component], out=scratch)
+        np.sum(np.square(values, out=squares[:, :count]), axis=0, out=lengths)
         np.sqrt(lengths, out=lengths)
-        threshold = speed[start:stop, None]
-        np.less_equal(lengths, near_fraction * threshold, out=near[start:stop])
-        if near[start:stop].any():
-            ring, column = np.nonzero(lengths <= ZERO_FRACTION * threshold)
-            limit = np.einsum("za,zac->cz", trig_basis_derivative(theta[column]), coefficients[start + ring])
-            values[:, ring, column] = limit
-            lengths[ring, column] = np.linalg.norm(limit, axis=0)
-        np.divide(1.0, lengths, out=inverse[:count])
+        lengths.min(axis=1, out=smallest[start:stop])
+        close = np.flatnonzero(smallest[start:stop] <= near_fraction * speed[start:stop])
+        if close.size:
+            ring, column = np.nonzero(lengths[close] <= near_fraction * speed[start + close, None])
+            near_rings.append(start + close[ring])
+            near_columns.append(column)
+            _limit_at_zeros(values, lengths, close, coefficients[start:stop], theta, speed[start:stop])
+            smallest[start:stop] = lengths.min(axis=1)
+        np.divide(1.0, lengths, out=lengths)
         for component in range(3):
-            np.multiply(values[component], inverse[:count], out=unit[start:stop, :, component])
-    return unit, size, near
+            np.multiply(values[component], lengths, out=unit[start:stop, :, component])
+    near = (np.concatenate(near_rings), np.concatenate(near_columns)) if near_rings else (
+        np.empty(0, np.intp), np.empty(0, np.intp))
+    return unit, smallest, near
+
+
+def _limit_at_zeros(values, lengths, rows, coefficients, theta, speed) -> None:
+    """Where |N| (lengths (R, M)) of the given rows vanishes, N and |N| become dN/dtheta and its size."""
+    ring, column = np.nonzero(lengths[rows] <= ZERO_FRACTION * speed[rows, None])
+    if ring.size:
+        ring = rows[ring]
+        limit = np.einsum("za,zac->cz", trig_basis_derivative(theta[column]), coefficients[ring])
+        values[:, ring, column] = limit
+        lengths[ring, column] = np.linalg.norm(limit, axis=0)
 
 
 def derivative_bound(coefficients: np.ndarray) -> np.ndarray:

@@ -301,7 +301,7 @@ def mesh_ribbon_surface(surface: EvolvedSurface, around: int, along: int | None 
     normals = normals.reshape(-1, 3)
     if rows.size:
         faces = _orient_faces(positions, normals, faces, rows, around)
-    faces = drop_zero_area(positions, faces, (size_sq <= NEAR_ZERO_FRACTION**2).ravel())
+    faces = drop_zero_area(positions, faces, np.flatnonzero(size_sq <= NEAR_ZERO_FRACTION**2))
     ends = np.stack([rings.a, 0.5 * (rings.a + rings.b), rings.b], axis=1)
     uvs = uv_map.grid_uvs(uv_map.along_coordinates(ends), around)
     return SurfaceMesh(name=surface.name, positions=positions, normals=normals, uvs=uvs, faces=faces,
