@@ -8,12 +8,14 @@ counts.
 
 from __future__ import annotations
 
+import zipfile
 from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
 
+from cgamesh.export import usdz
 from cgamesh.export.registry import WRITERS
 from cgamesh.pipeline import Resolution, mesh_scene
 from cgamesh.scene import load_scene
@@ -74,6 +76,39 @@ def test_usd_files_pass_compliance_and_mesh_checks_and_reload(exported, stem):
     folder, meshes, scene = exported[stem]
     for suffix in USD:
         check_usd_file(folder / f"plain{suffix}", meshes, up=scene.up, meters_per_unit=scene.meters_per_unit)
+
+
+@pytest.mark.parametrize("stem", [p.stem for p in EXAMPLES])
+def test_usdz_holds_one_stored_crate_aligned_to_64_bytes(exported, stem):
+    # The usdz specification's layout, read straight off the archive's headers.
+    folder, _, _ = exported[stem]
+    entries = usdz.data_offsets(folder / "plain.usdz")
+    assert [(name, compression) for name, _, compression in entries] == [("plain.usdc", zipfile.ZIP_STORED)]
+    assert entries[0][1] % 64 == 0
+    with zipfile.ZipFile(folder / "plain.usdz") as package:
+        assert package.testzip() is None  # CRC and sizes as stored
+        assert package.read("plain.usdc")[:8] == b"PXR-USDC"
+
+
+@pytest.mark.parametrize("name_length", range(1, 70))
+def test_usdz_padding_aligns_every_name_length(tmp_path, name_length):
+    crate = tmp_path / "crate"
+    crate.write_bytes(b"PXR-USDC" + bytes(range(256)) * 3)
+    name = "n" * name_length
+    with open(tmp_path / "p.usdz", "wb") as archive:
+        usdz.write_package(crate, archive, name)
+    (entry, offset, compression), = usdz.data_offsets(tmp_path / "p.usdz")
+    assert (entry, offset % 64, compression) == (name, 0, zipfile.ZIP_STORED)
+    with zipfile.ZipFile(tmp_path / "p.usdz") as package:
+        assert package.read(name) == crate.read_bytes()
+
+
+def test_a_crate_too_large_for_a_usdz_is_refused(tmp_path, monkeypatch):
+    crate = tmp_path / "crate"
+    crate.write_bytes(bytes(100))
+    monkeypatch.setattr(usdz, "LARGEST", 100)
+    with open(tmp_path / "p.usdz", "wb") as archive, pytest.raises(usdz.PackageTooLargeError, match="Zip64"):
+        usdz.write_package(crate, archive, "x.usdc")
 
 
 @pytest.mark.parametrize("stem", [p.stem for p in EXAMPLES])

@@ -67,7 +67,9 @@ def check_values(mesh: SurfaceMesh, path) -> np.ndarray:
 def normal_lengths(mesh: SurfaceMesh, path) -> np.ndarray:
     """|normal| (V,), after checking each is within NORMAL_LENGTH_TOLERANCE of 1 (NaN fails too)."""
     normals = np.asarray(mesh.normals, dtype=np.float64)
-    length = np.sqrt(np.einsum("ij,ij->i", normals, normals))
+    # Squares summed by a matrix-vector product: several times faster than einsum's loop
+    # over a last axis of 3.
+    length = np.sqrt(np.square(normals) @ np.ones(3))
     bad = ~(np.abs(length - 1.0) <= NORMAL_LENGTH_TOLERANCE)  # NaN compares False: caught too
     if bad.any():
         k = int(np.argmax(bad))
@@ -86,18 +88,20 @@ def check_material(mesh: SurfaceMesh, material: Material, path) -> None:
 
 
 def check_surfaces(path, surfaces: Sequence[tuple[SurfaceMesh, Material]], up: str,
-                   meters_per_unit: float) -> float:
-    """Everything above for every surface, and unique names; returns meters_per_unit."""
+                   meters_per_unit: float) -> tuple[float, list[np.ndarray]]:
+    """Everything above for every surface, and unique names; returns meters_per_unit and each
+    mesh's normal lengths (V,), for writers that normalise the normals they store."""
     scale = check_arguments(path, surfaces, up, meters_per_unit)
     seen = set()
+    lengths = []
     for mesh, material in surfaces:
         if mesh.name in seen:
             raise ExportError(f"cannot export {path}: two surfaces are named {mesh.name!r}")
         seen.add(mesh.name)
         check_shapes(mesh, path)
-        check_values(mesh, path)
+        lengths.append(check_values(mesh, path))
         check_material(mesh, material, path)
-    return scale
+    return scale, lengths
 
 
 def column_bounds(a: np.ndarray) -> np.ndarray:

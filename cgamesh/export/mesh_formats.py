@@ -50,7 +50,7 @@ def write_mesh_format(
     suffix = target.suffix.lower()
     if suffix not in SUFFIXES:
         raise ExportError(f"cannot export {path}: expected one of {', '.join(SUFFIXES)}, got {suffix!r}")
-    check_surfaces(path, surfaces, up, meters_per_unit)
+    check_surfaces(path, surfaces, up, meters_per_unit)  # the values are checked, not rescaled
     from cgamesh.optional import require
 
     trimesh = require("trimesh", "formats", f"{suffix} export")
