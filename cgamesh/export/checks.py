@@ -8,6 +8,7 @@ the other writers call ``check_surfaces``.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 
@@ -55,13 +56,23 @@ def check_shapes(mesh: SurfaceMesh, path) -> None:
         raise ExportError(f"{where}: face indices must be in [0, {v - 1}], got [{lo}, {hi}]")
 
 
-def check_values(mesh: SurfaceMesh, path) -> np.ndarray:
-    """Finite positions and UVs, finite unit normals; returns the normals' lengths (V,)."""
+class Measured(NamedTuple):
+    """What the checks measure of a mesh, for writers that need it: position bounds (2, 3) and
+    normal lengths (V,)."""
+
+    bounds: np.ndarray
+    normal_lengths: np.ndarray
+
+
+def check_values(mesh: SurfaceMesh, path) -> Measured:
+    """Finite positions and UVs, finite unit normals; returns what was measured on the way."""
     where = f"cannot export {path}: surface {mesh.name!r}"
+    bounds = {}
     for name in ("positions", "uvs"):
-        if not np.isfinite(column_bounds(np.asarray(getattr(mesh, name), dtype=np.float64))).all():
+        bounds[name] = column_bounds(np.asarray(getattr(mesh, name), dtype=np.float64))
+        if not np.isfinite(bounds[name]).all():
             raise ExportError(f"{where}: {name} contain NaN or infinity")
-    return normal_lengths(mesh, path)
+    return Measured(bounds["positions"], normal_lengths(mesh, path))
 
 
 def normal_lengths(mesh: SurfaceMesh, path) -> np.ndarray:
@@ -88,20 +99,20 @@ def check_material(mesh: SurfaceMesh, material: Material, path) -> None:
 
 
 def check_surfaces(path, surfaces: Sequence[tuple[SurfaceMesh, Material]], up: str,
-                   meters_per_unit: float) -> tuple[float, list[np.ndarray]]:
-    """Everything above for every surface, and unique names; returns meters_per_unit and each
-    mesh's normal lengths (V,), for writers that normalise the normals they store."""
+                   meters_per_unit: float) -> tuple[float, list[Measured]]:
+    """Everything above for every surface, and unique names; returns meters_per_unit and what
+    was measured of each mesh (so writers need not measure it again)."""
     scale = check_arguments(path, surfaces, up, meters_per_unit)
     seen = set()
-    lengths = []
+    measured = []
     for mesh, material in surfaces:
         if mesh.name in seen:
             raise ExportError(f"cannot export {path}: two surfaces are named {mesh.name!r}")
         seen.add(mesh.name)
         check_shapes(mesh, path)
-        lengths.append(check_values(mesh, path))
+        measured.append(check_values(mesh, path))
         check_material(mesh, material, path)
-    return scale, lengths
+    return scale, measured
 
 
 def column_bounds(a: np.ndarray) -> np.ndarray:

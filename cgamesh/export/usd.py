@@ -37,7 +37,7 @@ import numpy as np
 
 from cgamesh.errors import ExportError
 from cgamesh.export.atomic import atomic_path, atomic_write
-from cgamesh.export.checks import check_surfaces, column_bounds
+from cgamesh.export.checks import Measured, check_surfaces
 from cgamesh.export.usdz import PackageTooLargeError, write_package
 from cgamesh.material import Material
 from cgamesh.mesh import SurfaceMesh
@@ -71,10 +71,10 @@ def write_usd(
     suffix = target.suffix.lower()
     if suffix not in SUFFIXES:
         raise ExportError(f"cannot export {path}: a USD file ends in one of {', '.join(SUFFIXES)}, got {suffix!r}")
-    scale, normal_lengths = check_surfaces(path, surfaces, up, meters_per_unit)
+    scale, measured = check_surfaces(path, surfaces, up, meters_per_unit)
     pxr = _pxr()
     stage = build_stage(pxr, surfaces, up=up, meters_per_unit=scale, source_units=source_units,
-                        root=_root_name(pxr, target), y_up=suffix == ".usdz", normal_lengths=normal_lengths)
+                        root=_root_name(pxr, target), y_up=suffix == ".usdz", measured=measured)
     layer = stage.GetRootLayer()
     if suffix == ".usdz":
         with tempfile.TemporaryDirectory(prefix="cgamesh-usdz-", dir=_scratch_dir()) as folder:
@@ -135,10 +135,10 @@ def _root_name(pxr: _Pxr, target: Path) -> str:
 
 
 def build_stage(pxr: _Pxr, surfaces, *, up: str, meters_per_unit: float, source_units: str, root: str,
-                normal_lengths: list[np.ndarray], y_up: bool = False):
+                measured: list[Measured], y_up: bool = False):
     """An in-memory stage holding every surface (see the module docstring).
 
-    ``normal_lengths``: each mesh's |normal| (V,), as ``check_surfaces`` measured them.
+    ``measured``: each mesh's bounds and normal lengths, as ``check_surfaces`` measured them.
 
     ``y_up``: the stage must be +Y up (a .usdz, by the ARKit rules); a z-up scene then gets
     upAxis Y and a -90 degree rotation about X on the default prim, mapping (x, y, z) to
@@ -163,8 +163,8 @@ def build_stage(pxr: _Pxr, surfaces, *, up: str, meters_per_unit: float, source_
     while scope_name in names:
         scope_name = "_" + scope_name
     scope = UsdGeom.Scope.Define(stage, root_path.AppendChild(scope_name)).GetPath()
-    for (mesh, material), length in zip(surfaces, normal_lengths):
-        usd_mesh = _define_mesh(pxr, stage, root_path.AppendChild(mesh.name), mesh, length)
+    for (mesh, material), measures in zip(surfaces, measured):
+        usd_mesh = _define_mesh(pxr, stage, root_path.AppendChild(mesh.name), mesh, measures)
         usd_material = _define_material(pxr, stage, scope.AppendChild(mesh.name), material)
         binding = UsdShade.MaterialBindingAPI.Apply(usd_mesh.GetPrim())
         binding.Bind(usd_material)
@@ -178,16 +178,19 @@ def welded(mesh: SurfaceMesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     weld = np.asarray(weld)
     v = mesh.vertex_count
     own = weld == np.arange(v, dtype=weld.dtype)
-    keep = np.flatnonzero(own)
-    index = np.empty(v, dtype=np.int32)
-    index[keep] = np.arange(len(keep), dtype=np.int32)
-    return keep, index[weld], np.flatnonzero(~own)
+    repeated = np.flatnonzero(~own)
+    # A kept vertex's point is the number of kept vertices before it; a repeated vertex takes
+    # the point of the one it repeats (weld[i] < i, and that one is kept).
+    point_of = np.cumsum(own, dtype=np.int32)
+    point_of -= 1
+    point_of[repeated] = point_of[weld[repeated]]
+    return np.flatnonzero(own), point_of, repeated
 
 
-def _define_mesh(pxr: _Pxr, stage, prim_path, mesh: SurfaceMesh, length: np.ndarray):
+def _define_mesh(pxr: _Pxr, stage, prim_path, mesh: SurfaceMesh, measured: Measured):
     Gf, Sdf, UsdGeom, Vt = pxr.Gf, pxr.Sdf, pxr.UsdGeom, pxr.Vt
     positions = np.asarray(mesh.positions, dtype=np.float64)
-    lo, hi = column_bounds(positions)
+    lo, hi = measured.bounds
     centre = 0.5 * (lo + hi)
     keep, point_of, repeated = welded(mesh)
     points = np.empty((len(keep), 3), dtype=np.float32)
@@ -205,10 +208,14 @@ def _define_mesh(pxr: _Pxr, stage, prim_path, mesh: SurfaceMesh, length: np.ndar
     usd_mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
     usd_mesh.CreateFaceVertexCountsAttr(Vt.IntArray(len(faces), 3))
     usd_mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(weld.ravel()))
-    usd_mesh.CreateExtentAttr(Vt.Vec3fArray.FromNumpy(column_bounds(points).astype(np.float32)))
+    # The points' own float32 bounds: rounding is monotone, so the extremes of the rounded
+    # offsets are the rounded offsets of the extremes.
+    extent = (np.stack([lo, hi]) - centre).astype(np.float32)
+    usd_mesh.CreateExtentAttr(Vt.Vec3fArray.FromNumpy(extent))
 
     primvars = UsdGeom.PrimvarsAPI(usd_mesh.GetPrim())
     normals = np.asarray(mesh.normals, dtype=np.float64)
+    length = measured.normal_lengths
     if np.abs(length - 1.0).max() <= UNIT_ENOUGH:  # the meshers' normals: rounding them is all there is to do
         unit = normals.astype(np.float32)
     else:
