@@ -1,6 +1,6 @@
 """Export speed: microseconds per vertex to write GLB, USDC and USDZ for the KB tube at size x size.
 
-    python benchmarks/bench_exports.py [--size 1024] [--repeats 3]
+    python benchmarks/bench_exports.py [--size 1024] [--repeats 5]
 
 Prints, for the same mesh, the best of ``repeats`` writes of each format in us/vertex and the
 USD formats' ratio to GLB (targets: GLB <= 0.15 us/vertex, USD within 3x of GLB), plus the raw
@@ -38,7 +38,7 @@ EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=1024)
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
     n = args.size
 
