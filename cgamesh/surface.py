@@ -16,7 +16,7 @@ from typing import Protocol
 import numpy as np
 
 from cgamesh.algebra import products
-from cgamesh.algebra.conformal import up
+from cgamesh.algebra.conformal import EUCLIDEAN, up, weight
 from cgamesh.algebra.layout import grade_indices
 from cgamesh.curves import CurveBasis
 from cgamesh.errors import DegenerateGeometryError
@@ -128,8 +128,8 @@ class CircleRings:
         linear in X: each ring's 5 x 5 matrix is built once and applied to its S points.
         """
         local = self.frame.to_local(points)
-        moved = up(local)[..., _VECTORS] @ self._vector_map[..., _VECTORS]
-        local_velocity = moved[..., :3] - (moved[..., 4] - moved[..., 3])[..., None] * local  # weight = X5 - X4
+        moved = up(local)[..., _VECTORS] @ self._vector_map
+        local_velocity = moved[..., EUCLIDEAN] - weight(moved)[..., None] * local
         return self.frame.scale * local_velocity
 
     @cached_property
