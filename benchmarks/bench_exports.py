@@ -27,10 +27,10 @@ from timing import best_of  # noqa: E402 (this script's folder is on sys.path)
 from cgamesh.export.gltf import write_glb  # noqa: E402
 from cgamesh.export.usd import write_usd  # noqa: E402
 from cgamesh.material import Material  # noqa: E402
-from cgamesh.meshing import mesh_circle_surface  # noqa: E402
+from cgamesh.meshing.circles import mesh_circle_surface  # noqa: E402
 from cgamesh.pipeline import build_surface  # noqa: E402
-from cgamesh.readback import read_gltf  # noqa: E402
-from cgamesh.scene import load_scene  # noqa: E402
+from cgamesh.readers.readback import read_gltf  # noqa: E402
+from cgamesh.inputs.scene import load_scene  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 

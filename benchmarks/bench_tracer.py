@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cgamesh.scene import load_scene
+from cgamesh.inputs.scene import load_scene
 from cgamesh.tracer import shading
 from cgamesh.tracer.evolved import RootFinder
 from cgamesh.tracer.render import render

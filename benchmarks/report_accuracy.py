@@ -5,7 +5,7 @@
 1. For every surface of the examples (circles and point pairs) it meshes uniform grids of
    growing size and tolerance-driven meshes for tolerances from 1e-1 to 1e-4 of the surface's
    size, and measures each mesh's largest deviation from the true surface over triangle
-   interiors (cgamesh.deviation), its vertex count and the time it took.
+   interiors (cgamesh.meshing.deviation), its vertex count and the time it took.
 2. On the fig. 17 scene it measures the tracer's sampled root finder against the number N of
    objects per segment (hit-distance and normal errors, time) against the polynomial finder
    (benchmarks/bench_tracer.py's analysis).
@@ -24,11 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
-from cgamesh.deviation import CIRCLES, SEGMENTS, grid_deviation
-from cgamesh.meshing import mesh_circle_surface
+from cgamesh.meshing.deviation import CIRCLES, SEGMENTS, grid_deviation
+from cgamesh.meshing.circles import mesh_circle_surface
 from cgamesh.pipeline import Resolution, build_surface, mesh_surface
-from cgamesh.ribbons import mesh_ribbon_surface
-from cgamesh.scene import load_scene
+from cgamesh.meshing.ribbons import mesh_ribbon_surface
+from cgamesh.inputs.scene import load_scene
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
@@ -182,7 +182,7 @@ def main() -> None:
         "Regenerate with `python benchmarks/report_accuracy.py --out docs`.\n\n"
         "## Tessellation\n\n"
         "Deviation is the largest distance of the mesh from the true surface over triangle interiors\n"
-        "(cgamesh.deviation), relative to the surface's size (the radius of the ball its controls\n"
+        "(cgamesh.meshing.deviation), relative to the surface's size (the radius of the ball its controls\n"
         "fill). Uniform grids have n vertices around (n / 4 across a ribbon) and n rings per segment;\n"
         "tolerance meshes are cgamesh's tolerance-driven tessellation, whose time includes measuring\n"
         "the result. Plots: `figures/accuracy_<example>_<surface>.png`.\n\n"

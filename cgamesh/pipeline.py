@@ -9,15 +9,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 
-from cgamesh import uv as uv_map
-from cgamesh.construction import build_surface, make_curve  # noqa: F401 (part of this module's API)
+from cgamesh.meshing import uv as uv_map
+from cgamesh.geometry.construction import build_surface, make_curve  # noqa: F401 (part of this module's API)
 from cgamesh.errors import CgameshError, InvalidInputError
 from cgamesh.material import Material
-from cgamesh.mesh import SurfaceMesh
-from cgamesh.meshing import mesh_circle_surface
-from cgamesh.ribbons import mesh_ribbon_surface
-from cgamesh.scene import Scene, SurfaceSpec
-from cgamesh.tessellation import mesh_to_tolerance, ribbon_to_tolerance
+from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.meshing.circles import mesh_circle_surface
+from cgamesh.meshing.ribbons import mesh_ribbon_surface
+from cgamesh.inputs.scene import Scene, SurfaceSpec
+from cgamesh.meshing.tessellation import mesh_to_tolerance, ribbon_to_tolerance
 
 
 @dataclass(frozen=True)

@@ -34,8 +34,8 @@ from pathlib import Path
 import numpy as np
 
 from cgamesh.errors import InvalidInputError
-from cgamesh.mesh import SurfaceMesh
-from cgamesh.weld import weld_by_position
+from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.meshing.weld import weld_by_position
 
 DEGENERATE_FRACTION = 1e-12
 
@@ -280,15 +280,15 @@ def load_meshes(path: str | Path) -> list[SurfaceMesh]:
     if not path.is_file():
         raise InvalidInputError(f"{path}: no such file")
     if suffix in (".glb", ".gltf"):
-        from cgamesh.readback import read_gltf
+        from cgamesh.readers.readback import read_gltf
 
         return read_gltf(path)
     if suffix in (".usd", ".usda", ".usdc", ".usdz"):
-        from cgamesh.readback import read_usd
+        from cgamesh.readers.readback import read_usd
 
         return read_usd(path)
     if suffix in (".obj", ".ply", ".stl"):
-        from cgamesh.readback import read_trimesh
+        from cgamesh.readers.readback import read_trimesh
 
         return read_trimesh(path)
     raise InvalidInputError(f"{path}: cannot check this kind of file; expected a scene (.yaml) or one of "

@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> str:
     from cgamesh.export.registry import write
     from cgamesh.pipeline import Resolution, mesh_scene
     from cgamesh.progress import Progress
-    from cgamesh.scene import load_scene
+    from cgamesh.inputs.scene import load_scene
 
     outputs = [Path(o) for o in args.output]
     for output in outputs:  # refused before any meshing: unknown formats, missing folders

@@ -37,7 +37,7 @@ def run(args: argparse.Namespace):
     path = Path(args.file)
     if path.suffix.lower() in (".yaml", ".yml"):
         from cgamesh.pipeline import Resolution, mesh_scene
-        from cgamesh.scene import load_scene
+        from cgamesh.inputs.scene import load_scene
 
         meshes = [mesh for mesh, _ in mesh_scene(load_scene(path), Resolution(args.around, args.along))]
     else:

@@ -46,7 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> str:
     from cgamesh.progress import Progress
-    from cgamesh.scene import load_scene
+    from cgamesh.inputs.scene import load_scene
     from cgamesh.tracer.evolved import RootFinder
     from cgamesh.tracer.png import write_png
     from cgamesh.tracer.render import band_count, render

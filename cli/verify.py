@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
 
     from cgamesh.errors import InvalidInputError
     from cgamesh.progress import Progress
-    from cgamesh.scene import load_scene
+    from cgamesh.inputs.scene import load_scene
     from cgamesh.tracer import verify as v
     from cgamesh.tracer.evolved import RootFinder
     from cgamesh.tracer.meshfile import read_glb

@@ -132,7 +132,7 @@ def oracle(g3c, g3c_tools) -> CliffordOracle:
 def _paper_weights(kind, n, t, tension=0.0, bias=0.0, continuity=0.0, closed=False, weights=None):
     """Dense curve weights (A, n) of the controls at global parameters t (A,), from the paper's formulas.
 
-    Written independently of cgamesh.curves (paper section 8; scene format for the ends):
+    Written independently of cgamesh.geometry.curves (paper section 8; scene format for the ends):
     linear and kb/catmull_rom are piecewise over t in [0, segments]; bezier and
     rational_bezier are one curve over t in [0, 1].
     """

@@ -44,7 +44,7 @@ def check_usd_file(path, meshes, *, up: str, meters_per_unit: float) -> None:
     normals and st equal to the source meshes (compared per triangle corner)."""
     from pxr import Usd, UsdGeom, UsdShade
 
-    from cgamesh.readback import expand_usd_mesh
+    from cgamesh.readers.readback import expand_usd_mesh
 
     problems = usd_compliance(path)
     assert problems == [], f"{path}: {problems}"
@@ -106,7 +106,7 @@ def check_usd_file(path, meshes, *, up: str, meters_per_unit: float) -> None:
 def check_gltf_reload(path, meshes, *, up: str, meters_per_unit: float, quantized: bool, tangents: bool) -> None:
     """World positions, normals, UVs (and tangents) read back equal the meshes', within the
     precision of the stored types."""
-    from cgamesh.readback import read_gltf
+    from cgamesh.readers.readback import read_gltf
 
     loaded = read_gltf(path, world=True)
     assert [m.name for m in loaded] == [m.name for m, _ in meshes]
@@ -122,7 +122,7 @@ def check_gltf_reload(path, meshes, *, up: str, meters_per_unit: float, quantize
         uv_tolerance = 1.0 / 65535.0 if quantized and mesh.uvs.min() >= 0 and mesh.uvs.max() <= 1 else 1e-6
         np.testing.assert_allclose(got.uvs, mesh.uvs, atol=uv_tolerance)
         if tangents:
-            from cgamesh.uv import tangents_of
+            from cgamesh.meshing.uv import tangents_of
 
             reference = tangents_of(mesh)
             np.testing.assert_allclose(got.tangents[:, :3], reference[:, :3] @ AXIS_MAP[up].T, atol=normal_tolerance)

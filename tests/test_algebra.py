@@ -1,12 +1,12 @@
-"""cgamesh.algebra: the product tables, the conformal model and the TRS rotors equal clifford's."""
+"""cgamesh.geometry.algebra: the product tables, the conformal model and the TRS rotors equal clifford's."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from cgamesh.algebra import conformal, products, rotors
-from cgamesh.algebra.layout import BLADE_NAMES, GRADES
+from cgamesh.geometry.algebra import conformal, products, rotors
+from cgamesh.geometry.algebra.layout import BLADE_NAMES, GRADES
 
 BATCH = 50
 

@@ -1,14 +1,14 @@
-"""cgamesh.curves: basis matrices hit their controls, equal the paper's formulas, and differentiate right."""
+"""cgamesh.geometry.curves: basis matrices hit their controls, equal the paper's formulas, and differentiate right."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from cgamesh.curves import split_parameter
-from cgamesh.curves.bezier import Bezier, RationalBezier, bernstein, bernstein_derivative
-from cgamesh.curves.kochanek_bartels import KochanekBartels, catmull_rom
-from cgamesh.curves.linear import Linear
+from cgamesh.geometry.curves import split_parameter
+from cgamesh.geometry.curves.bezier import Bezier, RationalBezier, bernstein, bernstein_derivative
+from cgamesh.geometry.curves.kochanek_bartels import KochanekBartels, catmull_rom
+from cgamesh.geometry.curves.linear import Linear
 
 H = 1e-6  # central-difference step in t
 

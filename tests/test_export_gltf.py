@@ -15,7 +15,7 @@ from cgamesh.errors import ExportError
 from cgamesh.export import atomic
 from cgamesh.export.gltf import write_glb
 from cgamesh.material import Material
-from cgamesh.mesh import SurfaceMesh
+from cgamesh.meshing.mesh import SurfaceMesh
 from gltf_validator import assert_clean
 
 # glTF's +Y-up frame from each source up axis: out = points @ AXIS_MAP[up].T

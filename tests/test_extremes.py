@@ -20,9 +20,9 @@ from hypothesis import strategies as st
 
 from cgamesh.errors import DegenerateGeometryError, InvalidInputError
 from cgamesh.material import Material
-from cgamesh.meshing import mesh_circle_surface
+from cgamesh.meshing.circles import mesh_circle_surface
 from cgamesh.pipeline import build_surface
-from cgamesh.scene import CircleControl, Location, SurfaceSpec
+from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
 
 ON_SURFACE = 1e-9  # relative to the surface's size
 NORMAL_DEGREES = 0.1

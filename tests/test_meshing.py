@@ -1,4 +1,4 @@
-"""cgamesh.meshing: grid vertices on the true circles, analytic normals, winding, seams, UVs, caps.
+"""cgamesh.meshing.circles: grid vertices on the true circles, analytic normals, winding, seams, UVs, caps.
 
 The reference is computed independently, object by object, with clifford (the ``oracle``
 fixture): the interpolant from the paper's curve formulas (``paper_weights``), projected with
@@ -15,11 +15,11 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from cgamesh.algebra import rotors
-from cgamesh.meshing import mesh_circle_surface
+from cgamesh.geometry.algebra import rotors
+from cgamesh.meshing.circles import mesh_circle_surface
 from cgamesh.pipeline import build_surface
-from cgamesh.scene import parse_scene
-from cgamesh.surface import CircleRings
+from cgamesh.inputs.scene import parse_scene
+from cgamesh.geometry.surface import CircleRings
 
 AROUND = 32
 ALONG = 60  # 59 rings steps: prime, so no interior ring sits on a segment joint
@@ -513,7 +513,7 @@ def test_a_vertex_exactly_on_a_characteristic_point_takes_the_limit_along_its_ci
 
 
 def test_unit_normals_equal_the_normalised_expansion_and_take_the_limit_at_a_zero(rng):
-    from cgamesh import normals as normal_field
+    from cgamesh.meshing import normals as normal_field
 
     theta = 2.0 * np.pi * np.arange(257) / 256
     coefficients = rng.standard_normal((70, 7, 3))  # more rings than one block holds

@@ -1,4 +1,4 @@
-"""cgamesh.objects: circles and point pairs built, normalised, oriented and read out as the format says."""
+"""cgamesh.geometry.objects: circles and point pairs built, normalised, oriented and read out as the format says."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from cgamesh import objects
+from cgamesh.geometry import objects
 from cgamesh.pipeline import build_surface
-from cgamesh.scene import parse_scene
-from cgamesh.surface import CircleRings
+from cgamesh.inputs.scene import parse_scene
+from cgamesh.geometry.surface import CircleRings
 
 
 # --- strategies: valid objects by construction -------------------------------------------------

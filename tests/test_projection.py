@@ -1,20 +1,20 @@
-"""cgamesh.projection: interpolants projected to blades exactly as the paper's eqs. 10-12 in clifford."""
+"""cgamesh.geometry.projection: interpolants projected to blades exactly as the paper's eqs. 10-12 in clifford."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from cgamesh import objects
-from cgamesh.curves.bezier import Bezier, RationalBezier
-from cgamesh.curves.kochanek_bartels import KochanekBartels, catmull_rom
-from cgamesh.curves.linear import Linear
+from cgamesh.geometry import objects
+from cgamesh.geometry.curves.bezier import Bezier, RationalBezier
+from cgamesh.geometry.curves.kochanek_bartels import KochanekBartels, catmull_rom
+from cgamesh.geometry.curves.linear import Linear
 from cgamesh.errors import DegenerateGeometryError
-from cgamesh.frame import LocalFrame
+from cgamesh.geometry.frame import LocalFrame
 from cgamesh.pipeline import build_surface
-from cgamesh.projection import margin, project, project_scalar
-from cgamesh.scene import parse_scene
-from cgamesh.surface import EvolvedSurface
+from cgamesh.geometry.projection import margin, project, project_scalar
+from cgamesh.inputs.scene import parse_scene
+from cgamesh.geometry.surface import EvolvedSurface
 
 H = 1e-6  # central-difference step in t
 

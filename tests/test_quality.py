@@ -13,7 +13,7 @@ import pytest
 
 from cgamesh.pipeline import Resolution, mesh_scene
 from cgamesh.quality import load_meshes, report
-from cgamesh.scene import load_scene, parse_scene
+from cgamesh.inputs.scene import load_scene, parse_scene
 from cgamesh_cli.main import main
 
 pytest.importorskip("pymeshlab", reason="SKIPPED, NOT CHECKED: pymeshlab is not installed")

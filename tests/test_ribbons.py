@@ -1,4 +1,4 @@
-"""cgamesh.ribbons: point-pair surfaces meshed as ruled ribbons, checked against clifford.
+"""cgamesh.meshing.ribbons: point-pair surfaces meshed as ruled ribbons, checked against clifford.
 
 Positions and normals are compared with ribbons rebuilt in clifford from the scene's numbers
 (controls, alignment, interpolant, projection, eq. 5 end points: conftest's ``oracle`` and
@@ -14,15 +14,15 @@ import numpy as np
 import pygltflib
 import pytest
 
-from cgamesh import objects
-from cgamesh.algebra import rotors
-from cgamesh.algebra.conformal import up
+from cgamesh.geometry import objects
+from cgamesh.geometry.algebra import rotors
+from cgamesh.geometry.algebra.conformal import up
 from cgamesh.errors import DegenerateGeometryError, NonFiniteInputError
 from cgamesh.export.gltf import write_glb
 from cgamesh.pipeline import Resolution, build_surface, mesh_surface
-from cgamesh.projection import project
-from cgamesh.ribbons import PairRings
-from cgamesh.scene import load_scene, parse_scene
+from cgamesh.geometry.projection import project
+from cgamesh.meshing.ribbons import PairRings
+from cgamesh.inputs.scene import load_scene, parse_scene
 from cgamesh_cli.main import main
 from gltf_validator import assert_clean
 

@@ -1,4 +1,4 @@
-"""cgamesh.scene: valid files become the right dataclasses, every mistake one precise line."""
+"""cgamesh.inputs.scene: valid files become the right dataclasses, every mistake one precise line."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from cgamesh.errors import (DegenerateGeometryError, InvalidInputError, NonFiniteInputError,
                             SceneFileError)
 from cgamesh.material import Material
-from cgamesh.scene import (CircleControl, Location, PointPairControl, Scene, SurfaceSpec,
+from cgamesh.inputs.scene import (CircleControl, Location, PointPairControl, Scene, SurfaceSpec,
                            load_scene, parse_scene)
 
 FILE = "spline.yaml"

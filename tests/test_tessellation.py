@@ -5,7 +5,7 @@ The measurement here is the test's own: the GLB is read back through its node tr
 triangle is sampled at 15 barycentric points (interior and edges), each sample finds its nearest
 member of the surface (circle or ruling segment) through a k-d tree over a point cloud of the
 surface, and golden-section search in t refines it on exact members. It is denser than
-cgamesh.deviation and shares only the closed-form distances to a circle and to a segment.
+cgamesh.meshing.deviation and shares only the closed-form distances to a circle and to a segment.
 """
 
 from __future__ import annotations
@@ -16,13 +16,13 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from cgamesh.deviation import CIRCLES, SEGMENTS, grid_deviation
+from cgamesh.meshing.deviation import CIRCLES, SEGMENTS, grid_deviation
 from cgamesh.export.gltf import write_glb
-from cgamesh.meshing import mesh_circle_surface
+from cgamesh.meshing.circles import mesh_circle_surface
 from cgamesh.pipeline import Resolution, build_surface, mesh_surface
-from cgamesh.readback import read_gltf
-from cgamesh.ribbons import mesh_ribbon_surface
-from cgamesh.scene import load_scene
+from cgamesh.readers.readback import read_gltf
+from cgamesh.meshing.ribbons import mesh_ribbon_surface
+from cgamesh.inputs.scene import load_scene
 
 EXAMPLES = sorted((Path(__file__).resolve().parent.parent / "examples").glob("*.yaml"))
 CASES = [(path, index) for path in EXAMPLES for index in range(len(load_scene(path).surfaces))]
@@ -111,7 +111,7 @@ def test_tolerance_is_met_on_the_exported_mesh_and_beats_uniform(path, index, re
     tolerance = relative * surface.frame.scale
     mesh = mesh_surface(spec, Resolution(tolerance=tolerance))
     assert mesh.max_deviation <= tolerance
-    if relative >= 1e-3:  # at 1e-4 the meshes are large: cgamesh.deviation's own measure must do
+    if relative >= 1e-3:  # at 1e-4 the meshes are large: cgamesh.meshing.deviation's own measure must do
         family = SEGMENTS if spec.type == "point_pairs" else CIRCLES
         grid_faces = mesh.faces[np.all(mesh.faces < _grid_size(mesh, spec), axis=1)]  # caps are exact discs
         measured = dense_deviation(surface, family, exported_positions(mesh, scene, tmp_path), grid_faces)

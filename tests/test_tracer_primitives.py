@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cgamesh.algebra import products
-from cgamesh.algebra.conformal import N_INF, up
+from cgamesh.geometry.algebra import products
+from cgamesh.geometry.algebra.conformal import N_INF, up
 from cgamesh.tracer import cga
 from cgamesh.tracer.camera import Camera, rotor_from_matrix
 from cgamesh.tracer.png import encode_png, read_png, write_png
@@ -194,7 +194,7 @@ def test_sphere_reflection_by_eq7_equals_eq8(rng):
 # --- camera ------------------------------------------------------------------------------------------
 
 def test_rotor_from_matrix_rotates_the_basis_into_the_columns(rng):
-    from cgamesh.algebra.rotors import apply_to_euclidean
+    from cgamesh.geometry.algebra.rotors import apply_to_euclidean
 
     for _ in range(5):
         q, _ = np.linalg.qr(rng.normal(size=(3, 3)))

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cgamesh.scene import load_scene
+from cgamesh.inputs.scene import load_scene
 from cgamesh.tracer.evolved import RootFinder
 from cgamesh.tracer.png import read_png
 from cgamesh.tracer.render import render

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from cgamesh.errors import DegenerateGeometryError, InvalidInputError, NonFiniteInputError, SceneFileError
-from cgamesh.scene import parse_scene
-from cgamesh.scene_rendering import Attenuation, PhongMaterial
+from cgamesh.inputs.scene import parse_scene
+from cgamesh.inputs.scene_rendering import Attenuation, PhongMaterial
 from cgamesh.tracer.world import build_world
 
 SURFACE = """cgamesh: 1

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cgamesh.scene import load_scene, parse_scene
+from cgamesh.inputs.scene import load_scene, parse_scene
 from cgamesh.tracer import chebyshev
 from cgamesh.tracer.evolved import RootFinder, TracedSurface
 from cgamesh.tracer.rays import Rays
@@ -126,7 +126,7 @@ def test_cocircular_point_pairs_trace_as_their_plane(curve, chords, rng):
     normals = surface.normals(points, hit.param[found])
     assert line_angle(normals, np.broadcast_to(n, normals.shape)).max() < 1e-8
     # Each hit lies on the chord of its own parameter.
-    from cgamesh.objects import point_pair_endpoints
+    from cgamesh.geometry.objects import point_pair_endpoints
 
     a, b = point_pair_endpoints(surface.surface.sample(hit.param[found]).blades)
     a, b = surface.frame.to_world(a), surface.frame.to_world(b)
@@ -231,7 +231,7 @@ def test_a_surface_far_from_the_origin_traces_like_the_same_surface_at_the_origi
 
 @pytest.mark.parametrize("example", ["kb_tube", "fig14_bezier_orders", "ribbon_loop"])
 def test_bounding_spheres_enclose_their_surfaces(example):
-    from cgamesh.objects import circle_euclidean, point_pair_endpoints
+    from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
 
     for spec in load_scene(EXAMPLES / f"{example}.yaml").surfaces:
         surface = TracedSurface(surface_from_spec(spec))
@@ -254,7 +254,7 @@ def test_the_tracer_never_imports_the_mesher():
     code = ("import sys, importlib, pkgutil, cgamesh.tracer as t\n"
             "for m in pkgutil.iter_modules(t.__path__): importlib.import_module('cgamesh.tracer.' + m.name)\n"
             "import cgamesh_cli.render, cgamesh_cli.verify\n"
-            "bad = [m for m in ('cgamesh.normals', 'cgamesh.meshing', 'cgamesh.ribbons', 'cgamesh.pipeline',"
+            "bad = [m for m in ('cgamesh.meshing.normals', 'cgamesh.meshing.circles', 'cgamesh.meshing.ribbons', 'cgamesh.pipeline',"
             " 'clifford', 'matplotlib') if m in sys.modules]\n"
             "print(bad)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -10,7 +10,7 @@ import pytest
 
 from cgamesh.export.gltf import write_glb
 from cgamesh.pipeline import Resolution, mesh_scene
-from cgamesh.scene import load_scene
+from cgamesh.inputs.scene import load_scene
 from cgamesh.tracer import verify
 from cgamesh.tracer.meshfile import read_glb
 from cgamesh.tracer.png import read_png

@@ -15,8 +15,8 @@ import pytest
 from cgamesh.errors import ExportError, SceneFileError
 from cgamesh.export.gltf import write_glb
 from cgamesh.pipeline import Resolution, mesh_scene
-from cgamesh.scene import load_scene, parse_scene
-from cgamesh.uv import tangents_of
+from cgamesh.inputs.scene import load_scene, parse_scene
+from cgamesh.meshing.uv import tangents_of
 
 EXAMPLES = sorted((Path(__file__).resolve().parent.parent / "examples").glob("*.yaml"))
 LOW = Resolution(12, 24)

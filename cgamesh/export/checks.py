@@ -14,7 +14,7 @@ import numpy as np
 
 from cgamesh.errors import ExportError
 from cgamesh.material import Material
-from cgamesh.mesh import SurfaceMesh
+from cgamesh.meshing.mesh import SurfaceMesh
 
 # Unit normals after a float32 cast are within ~1e-7 of length 1; an input normal further than
 # this from unit length is a bug upstream (SurfaceMesh promises unit normals), not rounding.

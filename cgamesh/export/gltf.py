@@ -12,7 +12,7 @@ the origin.
 Options:
 - ``tangents``: a TANGENT attribute (VEC4, w = +-1) so normal maps work: the mesher's analytic
   tangents (the circle's own d/dtheta) or, without them, tangents from the UV gradients
-  (``cgamesh.uv.tangents_of``). The bitangent cross(N, T) * w points along increasing V of
+  (``cgamesh.meshing.uv.tangents_of``). The bitangent cross(N, T) * w points along increasing V of
   the scene's UVs before the V flip (the convention Blender's exporter writes).
 - ``quantize``: KHR_mesh_quantization (required by the file): positions as normalized int16
   with a dequantising node transform (translation = centre, uniform scale = half the largest
@@ -43,7 +43,7 @@ from cgamesh.export.atomic import atomic_files, atomic_write
 from cgamesh.export.checks import (check_arguments, check_material, check_shapes, column_bounds,
                                    normal_lengths)
 from cgamesh.material import Material
-from cgamesh.mesh import SurfaceMesh
+from cgamesh.meshing.mesh import SurfaceMesh
 
 _GLB_MAGIC = 0x46546C67  # b"glTF"
 _CHUNK_JSON = 0x4E4F534A  # b"JSON"
@@ -300,7 +300,7 @@ def _fill_mesh(doc, blob, offset, mesh, layout, up, scale, path) -> g.Node:
 
 
 def _fill_tangents(out, mesh, perm, sign, where) -> None:
-    from cgamesh.uv import tangents_of
+    from cgamesh.meshing.uv import tangents_of
 
     try:
         tangents = np.asarray(tangents_of(mesh), dtype=np.float64)

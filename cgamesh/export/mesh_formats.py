@@ -25,7 +25,7 @@ from cgamesh.errors import ExportError
 from cgamesh.export.atomic import atomic_files, atomic_write
 from cgamesh.export.checks import check_surfaces
 from cgamesh.material import Material
-from cgamesh.mesh import SurfaceMesh
+from cgamesh.meshing.mesh import SurfaceMesh
 
 SUFFIXES = (".obj", ".ply", ".stl")
 _INDEX = re.compile(rb"\d+")

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from cgamesh.errors import InvalidInputError
 from cgamesh.material import Material
-from cgamesh.mesh import SurfaceMesh
+from cgamesh.meshing.mesh import SurfaceMesh
 
 
 @dataclass(frozen=True)

@@ -40,8 +40,8 @@ from cgamesh.export.atomic import atomic_path, atomic_write
 from cgamesh.export.checks import Measured, check_surfaces
 from cgamesh.export.usdz import PackageTooLargeError, write_package
 from cgamesh.material import Material
-from cgamesh.mesh import SurfaceMesh
-from cgamesh.weld import weld_by_position
+from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.meshing.weld import weld_by_position
 
 SUFFIXES = (".usda", ".usdc", ".usd", ".usdz")
 # Normals this close to unit length round to the same float32 vectors whether or not they are

@@ -3,8 +3,8 @@
 It renders a scene's analytic surfaces (found by root finding on the interpolated objects,
 never from a mesh) and its spheres, planes and discs with Blinn-Phong lighting, and it is
 the independent referee of the mesher: ``cgamesh verify`` compares a mesh's vertices and
-normals with the traced surface. So this package never imports ``cgamesh.normals``,
-``cgamesh.meshing`` or ``cgamesh.ribbons``; it uses only the algebra, the control objects,
+normals with the traced surface. So this package never imports ``cgamesh.meshing.normals``,
+``cgamesh.meshing.circles`` or ``cgamesh.meshing.ribbons``; it uses only the algebra, the control objects,
 the curves and the projection.
 
 Everything is vectorised over rays: a batch of rays is a ``Rays`` value holding CGA lines

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cgamesh.algebra.conformal import N_INF, up, weight
+from cgamesh.geometry.algebra.conformal import N_INF, up, weight
 from cgamesh.tracer import cga
 from cgamesh.tracer.rays import Rays
 

@@ -19,10 +19,10 @@ from functools import cached_property
 
 import numpy as np
 
-from cgamesh.algebra import products
-from cgamesh.algebra.conformal import N_0, up
-from cgamesh.algebra.layout import BLADE_COUNT, blade_index, grade_indices
-from cgamesh.algebra.rotors import translator, versor_matrix
+from cgamesh.geometry.algebra import products
+from cgamesh.geometry.algebra.conformal import N_0, up
+from cgamesh.geometry.algebra.layout import BLADE_COUNT, blade_index, grade_indices
+from cgamesh.geometry.algebra.rotors import translator, versor_matrix
 from cgamesh.tracer.rays import Rays
 
 _VECTORS = grade_indices(1)

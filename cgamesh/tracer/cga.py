@@ -19,9 +19,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from cgamesh.algebra import products
-from cgamesh.algebra.conformal import EUCLIDEAN, N_INF, down, up, weight
-from cgamesh.algebra.layout import BLADE_COUNT, GRADES, blade_index
+from cgamesh.geometry.algebra import products
+from cgamesh.geometry.algebra.conformal import EUCLIDEAN, N_INF, down, up, weight
+from cgamesh.geometry.algebra.layout import BLADE_COUNT, GRADES, blade_index
 
 I5 = products.PSEUDOSCALAR
 SCALAR = np.zeros(BLADE_COUNT)
@@ -60,7 +60,7 @@ def _tensor(kind: str, grades_a: tuple, grades_b: tuple, grades_out: tuple):
 
 def product(a: np.ndarray, b: np.ndarray, grades_a, grades_b, grades_out=(0, 1, 2, 3, 4, 5),
             kind: str = "geometric") -> np.ndarray:
-    """The same product as ``cgamesh.algebra.products`` (kind geometric, outer or inner), faster
+    """The same product as ``cgamesh.geometry.algebra.products`` (kind geometric, outer or inner), faster
     on large batches: one operand times the product tensor is a matrix product, then the other
     operand is contracted in. a, b: (N, 32) or (32,)."""
     blades_a, blades_b, blades_out, tensor = _tensor(kind, tuple(sorted(grades_a)), tuple(sorted(grades_b)),

@@ -22,9 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.algebra.conformal import N_INF
-from cgamesh.objects import circle_euclidean, point_pair_endpoints
-from cgamesh.surface import EvolvedSurface
+from cgamesh.geometry.algebra.conformal import N_INF
+from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
+from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.tracer import bounds, cga, surface_normals
 from cgamesh.tracer.primitives import EDGE_RTOL, Disc, Hit, PhongMaterial, disc_hits
 from cgamesh.tracer.rays import Rays

@@ -16,9 +16,9 @@ from typing import Protocol
 
 import numpy as np
 
-from cgamesh.algebra.conformal import N_INF, up
-from cgamesh.objects import circle_from_center_normal_radius, point_pair
-from cgamesh.scene_rendering import PhongMaterial
+from cgamesh.geometry.algebra.conformal import N_INF, up
+from cgamesh.geometry.objects import circle_from_center_normal_radius, point_pair
+from cgamesh.inputs.scene_rendering import PhongMaterial
 from cgamesh.tracer import cga
 from cgamesh.tracer.rays import Rays
 

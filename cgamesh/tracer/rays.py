@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.algebra.conformal import down
+from cgamesh.geometry.algebra.conformal import down
 from cgamesh.tracer import cga
 
 

@@ -54,12 +54,12 @@ from functools import lru_cache
 
 import numpy as np
 
-from cgamesh.algebra import products
-from cgamesh.curves.bezier import Bezier, RationalBezier, bernstein
-from cgamesh.curves.kochanek_bartels import KochanekBartels
-from cgamesh.curves.linear import Linear
+from cgamesh.geometry.algebra import products
+from cgamesh.geometry.curves.bezier import Bezier, RationalBezier, bernstein
+from cgamesh.geometry.curves.kochanek_bartels import KochanekBartels
+from cgamesh.geometry.curves.linear import Linear
 from cgamesh.errors import InvalidInputError
-from cgamesh.surface import EvolvedSurface
+from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.tracer import cga, chebyshev, sampled
 
 FINDERS = ("polynomial", "sampled")

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cgamesh.algebra.conformal import up
+from cgamesh.geometry.algebra.conformal import up
 from cgamesh.tracer import cga
 from cgamesh.tracer.evolved import TracedSurface
 from cgamesh.tracer.primitives import Hit

@@ -26,8 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from cgamesh.algebra.conformal import EUCLIDEAN, N_INF, up, weight
-from cgamesh.objects import point_pair_endpoints
+from cgamesh.geometry.algebra.conformal import EUCLIDEAN, N_INF, up, weight
+from cgamesh.geometry.objects import point_pair_endpoints
 from cgamesh.tracer import cga
 
 # Parameter step of the numerical normal (per unit of the curve parameter t).

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cgamesh.errors import InvalidInputError
-from cgamesh.objects import circle_euclidean
+from cgamesh.geometry.objects import circle_euclidean
 from cgamesh.tracer.evolved import TracedSurface
 from cgamesh.tracer.rays import Rays
 

@@ -17,12 +17,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.construction import build_surface
+from cgamesh.geometry.construction import build_surface
 from cgamesh.errors import CgameshError, DegenerateGeometryError
 from cgamesh.material import Material
-from cgamesh.scene import Scene, SurfaceSpec
-from cgamesh.scene_rendering import Attenuation, PhongMaterial
-from cgamesh.surface import EvolvedSurface
+from cgamesh.inputs.scene import Scene, SurfaceSpec
+from cgamesh.inputs.scene_rendering import Attenuation, PhongMaterial
+from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.tracer import bounds, cga
 from cgamesh.tracer.camera import Camera
 from cgamesh.tracer.evolved import RootFinder, TracedSurface

@@ -25,7 +25,7 @@ import numpy as np
 
 from cgamesh.export.atomic import atomic_write
 from cgamesh.material import Material
-from cgamesh.mesh import SurfaceMesh
+from cgamesh.meshing.mesh import SurfaceMesh
 
 # glTF's frame from the scene's: out = AXIS[up] @ x
 AXIS = {"z": np.array([[1.0, 0, 0], [0, 0, 1], [0, -1, 0]]), "y": np.eye(3)}
@@ -75,7 +75,7 @@ def _cga_objects(scene) -> tuple[list, list]:
     """Control objects and a few interpolated ones, each as the points that fix it (file frame):
     three points on a circle (counter-clockwise about its normal), the two ends of a point pair."""
     from cgamesh.pipeline import build_surface
-    from cgamesh.surface import CircleRings
+    from cgamesh.geometry.surface import CircleRings
 
     controls, interpolated = [], []
     for spec in scene.surfaces:
@@ -90,7 +90,7 @@ def _cga_objects(scene) -> tuple[list, list]:
         t = np.linspace(0.0, surface.segment_count, INTERPOLATED_PER_SURFACE + 2)[1:-1]
         projection = surface.sample(t)
         if spec.type == "point_pairs":
-            from cgamesh.ribbons import PairRings
+            from cgamesh.meshing.ribbons import PairRings
 
             rings = PairRings.from_projection(projection, surface.frame)
             interpolated += [[a.tolist(), b.tolist()] for a, b in zip(rings.a, rings.b)]

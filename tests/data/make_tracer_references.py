@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from cgamesh.scene import load_scene
+from cgamesh.inputs.scene import load_scene
 from cgamesh.tracer.png import write_png
 from cgamesh.tracer.render import render
 from cgamesh.tracer.world import build_world

@@ -13,7 +13,7 @@ from urllib.parse import unquote
 import numpy as np
 
 from cgamesh.errors import InvalidInputError
-from cgamesh.mesh import SurfaceMesh
+from cgamesh.meshing.mesh import SurfaceMesh
 
 _GLTF_DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 _GLTF_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}

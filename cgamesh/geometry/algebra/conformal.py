@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cgamesh.algebra.layout import BLADE_COUNT, blade_index
+from cgamesh.geometry.algebra.layout import BLADE_COUNT, blade_index
 
 E1, E2, E3, E4, E5 = (blade_index(f"e{i}") for i in range(1, 6))
 EUCLIDEAN = np.array([E1, E2, E3])

@@ -1,7 +1,7 @@
 """The rendering part of a scene file: camera, lights, objects, background, max_depth, attenuation.
 
 All optional, and used only by ``cgamesh render`` / ``cgamesh verify --image`` (the mesher
-ignores them). Read by ``cgamesh.scene`` with its node reader, so mistakes are reported the
+ignores them). Read by ``cgamesh.inputs.scene`` with its node reader, so mistakes are reported the
 same way (``scene.yaml:12: camera.position must be a list of 3 numbers, got ...``). Lengths
 are in the file's units and axes, like the surfaces.
 """

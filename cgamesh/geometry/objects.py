@@ -3,7 +3,7 @@
 Construction follows the scene format exactly: a circle {center, normal, radius} is A^B^D of
 three points on it in counter-clockwise order seen from the tip of ``normal``; {through} is
 A^B^D in the given order; a point pair {a, b} is up(a)^up(b). Objects are normalised to
-square to +1. Call these in a LocalFrame (see cgamesh.frame): the read-outs lose precision
+square to +1. Call these in a LocalFrame (see cgamesh.geometry.frame): the read-outs lose precision
 with the square of the distance from the origin.
 """
 
@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from cgamesh.algebra import products
-from cgamesh.algebra.conformal import EUCLIDEAN, N_INF, down, up
+from cgamesh.geometry.algebra import products
+from cgamesh.geometry.algebra.conformal import EUCLIDEAN, N_INF, down, up
 from cgamesh.errors import DegenerateGeometryError, NonFiniteInputError
 
 CIRCLE_GRADE = 3

@@ -17,8 +17,8 @@ from typing import Callable
 
 import numpy as np
 
-from cgamesh.objects import circle_euclidean, point_pair_endpoints
-from cgamesh.surface import EvolvedSurface
+from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
+from cgamesh.geometry.surface import EvolvedSurface
 
 # Members per ring interval on which each sample's nearest member is looked for.
 FINE_MEMBERS = 17

@@ -25,8 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.algebra import products
-from cgamesh.algebra.layout import GRADES
+from cgamesh.geometry.algebra import products
+from cgamesh.geometry.algebra.layout import GRADES
 
 _FOUR_VECTOR = GRADES == 4
 # Controls whose symmetric 4-vector products stay below this (relative) take ``project_scalar``.

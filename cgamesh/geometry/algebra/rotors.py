@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from cgamesh.algebra import products
-from cgamesh.algebra.conformal import EUCLIDEAN, N_0, N_INF, vector
-from cgamesh.algebra.layout import BLADE_COUNT, blade_index, grade_indices
+from cgamesh.geometry.algebra import products
+from cgamesh.geometry.algebra.conformal import EUCLIDEAN, N_0, N_INF, vector
+from cgamesh.geometry.algebra.layout import BLADE_COUNT, blade_index, grade_indices
 
 _E12, _E13, _E23 = blade_index("e12"), blade_index("e13"), blade_index("e23")
 _VECTORS = grade_indices(1)
@@ -41,7 +41,7 @@ def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     norm = np.sqrt(rotor[..., 0] ** 2 + rotor[..., _E12] ** 2 + rotor[..., _E13] ** 2 + rotor[..., _E23] ** 2)
     opposite = norm < 1e-8
     if np.any(opposite):
-        from cgamesh.objects import perpendicular_unit
+        from cgamesh.geometry.objects import perpendicular_unit
 
         axis = perpendicular_unit(a[opposite])
         # A half turn about an axis k is the rotor -I3 k = the bivector dual to k in 3D.

@@ -40,17 +40,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh import uv as uv_map
-from cgamesh.algebra import products
-from cgamesh.algebra.conformal import EUCLIDEAN, up, weight
+from cgamesh.meshing import uv as uv_map
+from cgamesh.geometry.algebra import products
+from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
 from cgamesh.errors import DegenerateGeometryError, InvalidInputError
-from cgamesh.frame import LocalFrame
-from cgamesh.mesh import SurfaceMesh
-from cgamesh.meshing import drop_zero_area, grid_faces
-from cgamesh.normals import expand
-from cgamesh.objects import point_pair_endpoints
-from cgamesh.projection import Projection
-from cgamesh.surface import EvolvedSurface
+from cgamesh.geometry.frame import LocalFrame
+from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.meshing.circles import drop_zero_area, grid_faces
+from cgamesh.meshing.normals import expand
+from cgamesh.geometry.objects import point_pair_endpoints
+from cgamesh.geometry.projection import Projection
+from cgamesh.geometry.surface import EvolvedSurface
 
 # |N| below this fraction of |d| max(|a'|, |b'|) is a zero of the normal field.
 ZERO_FRACTION = 1e-8

@@ -24,7 +24,7 @@ import yaml
 from cgamesh.errors import (DegenerateGeometryError, InvalidInputError, NonFiniteInputError,
                             SceneFileError)
 from cgamesh.material import Material
-from cgamesh.scene_rendering import (RENDERING_KEYS, Attenuation, CameraSpec, LightSpec, ObjectSpec,
+from cgamesh.inputs.scene_rendering import (RENDERING_KEYS, Attenuation, CameraSpec, LightSpec, ObjectSpec,
                                       parse_rendering)
 
 Vec3 = tuple[float, float, float]
@@ -127,7 +127,7 @@ class SurfaceSpec:
 class Scene:
     """A whole scene file: format version, units and up axis of the file, its surfaces in order.
 
-    The rendering keys (cgamesh.scene_rendering) are optional: ``camera`` None and ``lights``
+    The rendering keys (cgamesh.inputs.scene_rendering) are optional: ``camera`` None and ``lights``
     None when not given (the renderer then frames and lights the scene itself).
     """
 

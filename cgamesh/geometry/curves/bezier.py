@@ -7,7 +7,7 @@ from math import comb
 
 import numpy as np
 
-from cgamesh.curves import CurveBasis
+from cgamesh.geometry.curves import CurveBasis
 
 
 def bernstein(order: int, alpha: np.ndarray) -> np.ndarray:

@@ -15,14 +15,14 @@ from typing import Protocol
 
 import numpy as np
 
-from cgamesh.algebra import products
-from cgamesh.algebra.conformal import EUCLIDEAN, up, weight
-from cgamesh.algebra.layout import grade_indices
-from cgamesh.curves import CurveBasis
+from cgamesh.geometry.algebra import products
+from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
+from cgamesh.geometry.algebra.layout import grade_indices
+from cgamesh.geometry.curves import CurveBasis
 from cgamesh.errors import DegenerateGeometryError
-from cgamesh.frame import LocalFrame
-from cgamesh.objects import circle_euclidean
-from cgamesh.projection import Projection, four_vector_free, margin, project, project_scalar
+from cgamesh.geometry.frame import LocalFrame
+from cgamesh.geometry.objects import circle_euclidean
+from cgamesh.geometry.projection import Projection, four_vector_free, margin, project, project_scalar
 
 # The projection is refused where min(beta, g) falls below this fraction of |C'|^2: there
 # S grows like 1/sqrt(margin) and the object heads for a line, a point or nothing at all.

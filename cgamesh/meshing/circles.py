@@ -21,11 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh import normals as normal_field
-from cgamesh import uv as uv_map
-from cgamesh.algebra import rotors
-from cgamesh.mesh import SurfaceMesh
-from cgamesh.surface import CircleRings, EvolvedSurface
+from cgamesh.meshing import normals as normal_field
+from cgamesh.meshing import uv as uv_map
+from cgamesh.geometry.algebra import rotors
+from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.geometry.surface import CircleRings, EvolvedSurface
 
 E1 = np.array([1.0, 0.0, 0.0])
 E3 = np.array([0.0, 0.0, 1.0])

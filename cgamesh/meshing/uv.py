@@ -13,7 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from cgamesh.mesh import SurfaceMesh
+from cgamesh.meshing.mesh import SurfaceMesh
 
 
 def along_coordinates(ring_samples: np.ndarray) -> np.ndarray:

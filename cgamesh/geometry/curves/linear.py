@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.curves import CurveBasis, split_parameter
+from cgamesh.geometry.curves import CurveBasis, split_parameter
 
 
 @dataclass(frozen=True)

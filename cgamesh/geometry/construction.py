@@ -8,14 +8,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from cgamesh import objects
-from cgamesh.curves.bezier import Bezier, RationalBezier
-from cgamesh.curves.kochanek_bartels import KochanekBartels
-from cgamesh.curves.linear import Linear
+from cgamesh.geometry import objects
+from cgamesh.geometry.curves.bezier import Bezier, RationalBezier
+from cgamesh.geometry.curves.kochanek_bartels import KochanekBartels
+from cgamesh.geometry.curves.linear import Linear
 from cgamesh.errors import CgameshError, InvalidInputError
-from cgamesh.frame import LocalFrame
-from cgamesh.scene import SurfaceSpec
-from cgamesh.surface import EvolvedSurface
+from cgamesh.geometry.frame import LocalFrame
+from cgamesh.inputs.scene import SurfaceSpec
+from cgamesh.geometry.surface import EvolvedSurface
 
 
 def make_curve(spec: SurfaceSpec):

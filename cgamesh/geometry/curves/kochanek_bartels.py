@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.curves import CurveBasis, split_parameter
+from cgamesh.geometry.curves import CurveBasis, split_parameter
 
 
 def hermite(alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

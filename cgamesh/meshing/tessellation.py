@@ -11,7 +11,7 @@ surface's curvature along t. So
   from the previous one as it can be while no candidate ring between them lies further than
   the other share from the chords joining the two rings' vertices, so rings gather where the
   surface bends and thin out where it is straight;
-- the result is measured (cgamesh.deviation) and, if it misses, the budgets shrink in
+- the result is measured (cgamesh.meshing.deviation) and, if it misses, the budgets shrink in
   proportion and the choice is made again.
 
 Ribbons are straight across, so they need no budget for chords across; but the triangles of a
@@ -26,11 +26,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from cgamesh.deviation import CIRCLES, SEGMENTS, circle_read_out, grid_deviation, segment_read_out
-from cgamesh.mesh import SurfaceMesh
-from cgamesh.meshing import mesh_circle_surface, transported_frames
-from cgamesh.ribbons import mesh_ribbon_surface
-from cgamesh.surface import EvolvedSurface
+from cgamesh.meshing.deviation import CIRCLES, SEGMENTS, circle_read_out, grid_deviation, segment_read_out
+from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.meshing.circles import mesh_circle_surface, transported_frames
+from cgamesh.meshing.ribbons import mesh_ribbon_surface
+from cgamesh.geometry.surface import EvolvedSurface
 
 AROUND_SHARE = 0.5  # of the tolerance, for the chords around each circle
 ALONG_SHARE = 0.5  # for the chords between rings

@@ -17,7 +17,7 @@ from typing import Sequence
 
 import numpy as np
 
-from cgamesh.algebra.layout import (
+from cgamesh.geometry.algebra.layout import (
     BLADE_COUNT,
     GEOMETRIC_SIGN,
     GRADES,

@@ -1,0 +1,1 @@
+"""Geometry: the CGA algebra, control objects, curves, the blade projection and evolved surfaces."""

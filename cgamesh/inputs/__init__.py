@@ -1,0 +1,1 @@
+"""Inputs: what a user hands cgamesh, read and validated into specs (scene files and their rendering keys)."""

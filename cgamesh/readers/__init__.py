@@ -1,0 +1,1 @@
+"""Readers of exported files (glTF, USD, OBJ, PLY, STL) as meshes, for the quality report and checks."""
