@@ -101,7 +101,9 @@ class SurfaceSpec:
     ``around``/``along`` are set (and ``tolerance`` is None) unless the file gives a tolerance
     (file units), in which case both are None. ``tension``/``bias``/``continuity`` are 0.0 for
     every curve but kb. ``uv`` is one of UV_MODES; ``uv_scale`` (file units per texture repeat,
-    > 0) is given only with uv natural, None otherwise.
+    > 0) is given only with uv natural, None otherwise. ``interpolation`` says how circles are
+    interpolated: ``blade`` (the paper's blend of 3-blades, projected) or ``motor`` (each circle
+    carried by a similarity motion, docs/interpolation.md).
     """
 
     name: str
@@ -121,6 +123,7 @@ class SurfaceSpec:
     location: Location
     uv: str = "natural"
     uv_scale: float | None = None
+    interpolation: str = "blade"
 
 
 @dataclass(frozen=True)

@@ -35,6 +35,9 @@ class SurfaceMesh:
                 read-only broadcast view (a tube's grid has one pair of lengths).
     weld:       (V,) integer index of the first vertex at the bit-identical position (weld[i] <= i;
                 seams and cap rims repeat vertices): exporters that weld points use it.
+    colors:     (V, 3) float64 linear RGB in [0, 1] per vertex (glTF COLOR_0, USD displayColor).
+    attributes: per-vertex raw values by lower-case name, each (V,) float64 (e.g. ``radius``,
+                ``segment``, ``scalar``): glTF custom attributes ``_RADIUS`` ..., USD primvars.
     """
 
     name: str
@@ -47,6 +50,8 @@ class SurfaceMesh:
     uv_lengths: np.ndarray | None = None
     weld: np.ndarray | None = None
     max_deviation: float | None = None
+    colors: np.ndarray | None = None
+    attributes: dict[str, np.ndarray] | None = None
 
     @property
     def vertex_count(self) -> int:
