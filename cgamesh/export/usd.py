@@ -21,6 +21,11 @@ become one point, so the mesh is watertight where the surface is. ``primvars:nor
 lost or averaged. st is the scene's UV as it is (USD's st origin is bottom-left, like ours).
 ``doubleSided`` is set for double-sided surfaces (ribbons).
 
+Per-vertex channels, when a mesh has them, follow the same rule ("vertex" on the welded points
+where the repeated vertices agree, indexed "faceVarying" otherwise): colours as
+``primvars:displayColor`` (color3f[], linear RGB, USD's own colour primvar) and each attribute
+as a float[] primvar of its name (``radius`` -> ``primvars:radius``), for shaders to read.
+
 .usdz: the crate file is written to scratch space (memory when there is a /dev/shm) and
 packaged as the usdz specification requires (``cgamesh.export.usdz``: uncompressed, 64-byte
 aligned, the layout usd-core's own Sdf.ZipFileWriter produces, in a fraction of its time).
@@ -48,6 +53,8 @@ SUFFIXES = (".usda", ".usdc", ".usd", ".usdz")
 # divided by their length first.
 UNIT_ENOUGH = 1e-12
 MATERIALS_SCOPE = "Materials"
+# Primvars this writer (or UsdGeom) defines itself: per-vertex attributes may not take these names.
+RESERVED_PRIMVARS = ("normals", "st", "displayColor", "displayOpacity")
 
 
 def write_usd(
@@ -227,6 +234,16 @@ def _define_mesh(pxr: _Pxr, stage, prim_path, mesh: SurfaceMesh, measured: Measu
              repeated, first_of, faces)
     _primvar(pxr, primvars, "st", Sdf.ValueTypeNames.TexCoord2fArray, Vt.Vec2fArray,
              np.asarray(mesh.uvs, dtype=np.float32), keep, repeated, first_of, faces)
+    if mesh.colors is not None:
+        colors = np.clip(np.asarray(mesh.colors, dtype=np.float64), 0.0, 1.0).astype(np.float32)
+        _primvar(pxr, primvars, "displayColor", Sdf.ValueTypeNames.Color3fArray, Vt.Vec3fArray, colors, keep,
+                 repeated, first_of, faces)
+    for name in sorted(mesh.attributes or {}):
+        if name in RESERVED_PRIMVARS:
+            raise ExportError(f"cannot export to USD: surface {mesh.name!r}: an attribute cannot be named "
+                              f"{name!r}, the name of USD's own primvar")
+        _primvar(pxr, primvars, name, Sdf.ValueTypeNames.FloatArray, Vt.FloatArray,
+                 np.asarray(mesh.attributes[name], dtype=np.float32), keep, repeated, first_of, faces)
     return usd_mesh
 
 
