@@ -192,6 +192,18 @@ def test_usd_carries_display_color_and_attribute_primvars_and_complies(coloured,
         # colours by height agree at the seam and the caps' rims: one value per welded point
         assert primvars.GetPrimvar("displayColor").GetInterpolation() == UsdGeom.Tokens.vertex
         assert primvars.GetPrimvar("radius").GetTypeName() == "float[]"
+        # the bound material shows them (a .usdz: the ARKit rules allow no float3 primvar reader)
+        from pxr import UsdShade
+
+        bound, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+        surface = UsdShade.Shader(bound.GetPrim().GetChild("PreviewSurface"))
+        sources = surface.GetInput("diffuseColor").GetConnectedSources()[0]
+        if suffix == ".usdz":
+            assert sources == []
+        else:
+            reader = UsdShade.Shader(sources[0].source.GetPrim())
+            assert reader.GetIdAttr().Get() == "UsdPrimvarReader_float3"
+            assert reader.GetInput("varname").Get() == "displayColor"
         (got,) = read_usd(path)
         corners = mesh.faces.ravel()
         np.testing.assert_allclose(got.colors, mesh.colors[corners], rtol=0, atol=1e-7)
