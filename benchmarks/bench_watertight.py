@@ -15,7 +15,6 @@ triangles; the volume is positive and below the pieces' sum); it never asserts a
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import os
 import sys
 import tempfile
@@ -27,50 +26,12 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
-from closed_pieces import frustum, sphere  # noqa: E402 (the tests' folder is on sys.path)
+from closed_pieces import arbor  # noqa: E402 (the tests' folder is on sys.path)
 from timing import best_of  # noqa: E402 (this script's folder is on sys.path)
 
 from cgamesh.export.gltf import write_glb  # noqa: E402
 from cgamesh.material import Material  # noqa: E402
-from cgamesh.meshing.colors import segment_colors  # noqa: E402
 from cgamesh.meshing.watertight import union  # noqa: E402
-
-
-def arbor(segments: int, around: int, rings: int, rng: np.random.Generator):
-    """Pieces of a random dendritic tree: tubes with radius and segment attributes and colours,
-    junction spheres at branch points, the soma."""
-    soma_radius = 6.0
-    nodes = [np.zeros(3)]
-    headings = [np.zeros(3)]  # the direction of the segment ending at each node
-    radii = [1.5]
-    children = [0]
-    pieces = []
-    for k in range(segments):
-        parent = 0 if k < 4 else int(rng.integers(1, len(nodes)))
-        start = nodes[parent]
-        direction = headings[parent] + 0.9 * rng.normal(size=3)  # from the soma: any direction
-        direction /= np.linalg.norm(direction)
-        r0 = radii[parent] if parent else 1.5
-        r1 = max(0.2, r0 * rng.uniform(0.75, 0.95))
-        length = rng.uniform(4.0, 20.0) + (soma_radius if parent == 0 else 0.0)
-        end = start + length * direction
-        pieces.append(frustum(f"tube{k}", start, end, r0, r1, around=around, along=rings))
-        nodes.append(end)
-        headings.append(direction)
-        radii.append(r1)
-        children.append(0)
-        children[parent] += 1
-    for node, (point, radius, count) in enumerate(zip(nodes, radii, children)):
-        if node > 0 and count >= 1:
-            pieces.append(sphere(f"j{node}", point, radius, rings=max(4, around // 2 + 1), columns=around))
-    pieces.append(sphere("soma", np.zeros(3), soma_radius, rings=16, columns=24))
-    out = []
-    for k, piece in enumerate(pieces):
-        ids = np.full(piece.vertex_count, float(k))
-        distance = np.linalg.norm(piece.positions, axis=1)
-        out.append(dataclasses.replace(piece, colors=segment_colors(ids),
-                                       attributes={"segment": ids, "radius": distance}))
-    return out
 
 
 def boolean_alone(pieces):

@@ -11,7 +11,7 @@ import pytest
 from cgamesh.errors import InvalidInputError
 from cgamesh.meshing.colors import colormap, segment_colors
 from cgamesh.meshing.mesh import SurfaceMesh
-from closed_pieces import frustum, sphere
+from closed_pieces import arbor, frustum, sphere
 from exact_intersections import confirmed_intersections
 
 manifold3d = pytest.importorskip("manifold3d", reason="SKIPPED, NOT CHECKED: manifold3d (cgamesh[neuro]) is not installed")
@@ -240,3 +240,48 @@ def test_the_exact_triangle_test_tells_crossing_touching_and_disjoint_triangles_
     assert triangles_meet(base, base * 0.3 + [0.1, 0.1, 0.0])  # coplanar, inside it
     assert not triangles_meet(base, np.array([[0.6, 0.6, 0.0], [1.0, 0.6, 0.0], [0.6, 1.0, 0.0]]))  # coplanar, apart
     assert triangles_meet(base, np.array([[0.5, 0.5, 0.0], [1.0, 1.0, 0.0], [1.0, 0.5, 0.0]]))  # touching at a point
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".usdc"])
+def test_written_unions_pass_the_quality_report(tmp_path, suffix):
+    """The files a user gets: MeshLab (through ``cgamesh check``'s report) finds them watertight,
+    2-manifold, in one piece, with no self-intersecting and no degenerate triangle. Stored in
+    float32, the cut triangles' pieces are no longer coplanar to 1e-17, and MeshLab's test
+    decides them correctly."""
+    if suffix == ".usdc":
+        from export_checks import pxr_or_skip
+
+        pxr_or_skip()
+    from cgamesh.export.registry import write
+    from cgamesh.material import Material
+    from cgamesh.quality import load_meshes, report
+
+    for label, pieces in (("neuron", neuron_pieces()), ("arbor", arbor(60, 8, 4, np.random.default_rng(3)))):
+        path = tmp_path / f"{label}{suffix}"
+        write(path, [(union(pieces, label), Material())], up="z", meters_per_unit=1e-6, source_units="um")
+        result = report(load_meshes(path), str(path))
+        (surface,) = result.surfaces
+        assert (surface.boundary_edges, surface.non_manifold_edges, surface.non_manifold_vertices) == (0, 0, 0)
+        assert surface.connected_components == 1
+        assert surface.self_intersecting_triangles == 0 and surface.degenerate_triangles == 0
+        assert surface.flipped_normals == 0
+        assert result.failures() == []
+
+
+def test_importing_the_union_does_not_import_manifold3d():
+    import subprocess
+    import sys
+
+    probe = "import sys, cgamesh.meshing.watertight, cgamesh.meshing.colors; print('manifold3d' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+def test_a_missing_manifold3d_is_one_line_naming_the_extra(monkeypatch):
+    import sys
+
+    from cgamesh.optional import MissingDependencyError
+
+    monkeypatch.setitem(sys.modules, "manifold3d", None)  # makes the import fail
+    with pytest.raises(MissingDependencyError, match=r"pip install 'cgamesh\[neuro\]'"):
+        union([sphere("ball", (0.0, 0.0, 0.0), 1.0)], "ball")
