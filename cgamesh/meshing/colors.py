@@ -123,8 +123,9 @@ def colormap(values: np.ndarray, name: str = "viridis", lo: float | None = None,
     if hi == lo:
         t = np.where(np.isnan(values), np.nan, 0.5)
     else:
+        # halves: the difference of two finite doubles can overflow, of their halves never
         with np.errstate(invalid="ignore"):  # NaN stays NaN, and is coloured below
-            t = np.clip((values - lo) / (hi - lo), 0.0, 1.0)
+            t = np.clip((0.5 * values - 0.5 * lo) / (0.5 * hi - 0.5 * lo), 0.0, 1.0)
     table = COLORMAPS[name]
     knots = np.linspace(0.0, 1.0, len(table))
     t_safe = np.where(np.isnan(t), 0.0, t)
