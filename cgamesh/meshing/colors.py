@@ -144,11 +144,15 @@ def direction_colors(tangents: np.ndarray) -> np.ndarray:
     display it (sRGB-encoded), so it is converted to linear RGB: an axis-aligned tangent is a
     pure primary either way. Zero-length or non-finite tangents get ``NAN_COLOR``.
     """
-    tangents = np.asarray(tangents, dtype=np.float64).reshape(-1, 3)
-    length = np.sqrt(np.square(tangents) @ np.ones(3))
-    good = np.isfinite(length) & (length > 0.0)
+    tangents = np.abs(np.asarray(tangents, dtype=np.float64).reshape(-1, 3))
+    # divided by the largest component first, so neither huge nor tiny lengths over/underflow
+    largest = tangents.max(axis=1)
+    good = np.isfinite(largest) & (largest > 0.0)
+    scaled = np.zeros(tangents.shape)
+    np.divide(tangents, largest[:, None], out=scaled, where=good[:, None])
+    length = np.sqrt(np.square(scaled) @ np.ones(3))
     srgb = np.zeros(tangents.shape)
-    np.divide(np.abs(tangents), length[:, None], out=srgb, where=good[:, None])
+    np.divide(scaled, length[:, None], out=srgb, where=good[:, None])
     out = srgb_to_linear(np.clip(srgb, 0.0, 1.0))
     out[~good] = NAN_COLOR
     return out
