@@ -152,7 +152,11 @@ def _fix_new_vertices(props: np.ndarray, tris: np.ndarray, source: np.ndarray, c
         t, p = np.nonzero(pick)
         props[vertex[t], p] = source[t, 0, p]
     normals = props[new, _NORMAL]
-    props[new, _NORMAL] = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    if not (length > 1e-9).all():  # only pieces whose normals cancel inside a triangle get here
+        raise InvalidInputError("a union cut a triangle whose vertex normals cancel out: the pieces' normals "
+                                "must agree in direction within every triangle")
+    props[new, _NORMAL] = normals / length
     if colors:
         block = slice(_FIXED, _FIXED + 3)
         props[new, block] = np.clip(props[new, block], 0.0, 1.0)
