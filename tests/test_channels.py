@@ -300,6 +300,24 @@ def test_large_meshes_get_32_bit_indices_and_small_ones_16_bit(tmp_path, gltf_va
         np.testing.assert_allclose(got.colors, mesh.colors, atol=0.5 / 65535)
 
 
+def test_large_meshes_keep_their_indices_in_usd_and_ply(tmp_path):
+    mesh = strip(70001)
+    path = tmp_path / "strip.ply"
+    write(path, [(mesh, _material())], up="z", meters_per_unit=1.0, source_units="m")
+    (got,) = read_trimesh(path)
+    np.testing.assert_array_equal(got.faces, mesh.faces)
+    np.testing.assert_array_equal(got.attributes["radius"], mesh.attributes["radius"].astype(np.float32))
+    from export_checks import pxr_or_skip
+
+    pxr_or_skip()
+    path = tmp_path / "strip.usdc"
+    write(path, [(mesh, _material())], up="z", meters_per_unit=1.0, source_units="m")
+    (got,) = read_usd(path)
+    corners = mesh.faces.ravel()
+    np.testing.assert_allclose(got.positions, mesh.positions[corners], atol=1e-6)
+    np.testing.assert_allclose(got.colors, mesh.colors[corners], atol=1e-7)
+
+
 def strip(count: int) -> SurfaceMesh:
     """A flat zigzag strip of ``count`` vertices (alternately on two rows) with colours and an
     attribute, wound counter-clockwise seen from +z."""

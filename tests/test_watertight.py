@@ -285,3 +285,23 @@ def test_a_missing_manifold3d_is_one_line_naming_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "manifold3d", None)  # makes the import fail
     with pytest.raises(MissingDependencyError, match=r"pip install 'cgamesh\[neuro\]'"):
         union([sphere("ball", (0.0, 0.0, 0.0), 1.0)], "ball")
+
+
+@pytest.mark.parametrize("with_sphere", [False, True])
+def test_tubes_sharing_their_end_circle_exactly_join_into_one_closed_surface(with_sphere):
+    """A segment continuing straight from its parent's node circle: the two caps coincide, face
+    to face, and the seam vertices sit at the same points; symbolic perturbation joins them."""
+    node = (0.0, 0.0, 2.0)
+    pieces = [frustum("a", (0.0, 0.0, 0.0), node, 0.5, 0.5), frustum("b", node, (0.0, 0.0, 4.0), 0.5, 0.5)]
+    if with_sphere:
+        pieces.append(sphere("junction", node, 0.5))
+    result = union(pieces, "joined")
+    topology, flagged = meshlab_topology(result)
+    assert (topology["boundary_edges"], topology["non_two_manifold_edges"]) == (0, 0)
+    assert topology["connected_components_number"] == 1
+    points, faces = welded(result)
+    assert confirmed_intersections(points, faces, flagged) == []
+    # no cap survives inside: every vertex at the node's height is on the tube's wall or the sphere
+    at_node = np.abs(result.positions[:, 2] - 2.0) < 1e-12
+    radial = np.linalg.norm(result.positions[at_node, :2], axis=1)
+    assert at_node.any() and radial.min() > 0.45
