@@ -71,7 +71,7 @@ def union(pieces: Sequence[SurfaceMesh], name: str) -> SurfaceMesh:
     props = np.array(out.vert_properties, dtype=np.float64)  # a copy we may write to
     tris = np.asarray(out.tri_verts, dtype=np.int64)
     source = _source_corners(out, tris, piece_of_id, rows, faces)
-    _fix_new_vertices(props, tris, source, colors)
+    _fix_new_vertices(props, tris, source, colors, name)
     return _surface_mesh(name, props, tris, colors, attribute_names)
 
 
@@ -130,7 +130,7 @@ def _source_corners(out, tris: np.ndarray, piece_of_id: dict[int, int], rows: li
     return all_rows[all_faces[face]]
 
 
-def _fix_new_vertices(props: np.ndarray, tris: np.ndarray, source: np.ndarray, colors: bool) -> None:
+def _fix_new_vertices(props: np.ndarray, tris: np.ndarray, source: np.ndarray, colors: bool, name: str) -> None:
     """Give vertices made by the union (on cut lines) their final values, in place; vertices
     whose row is one of their source triangle's corners are left exactly as they are."""
     corners = props[tris]  # (T, 3, P)
@@ -154,8 +154,8 @@ def _fix_new_vertices(props: np.ndarray, tris: np.ndarray, source: np.ndarray, c
     normals = props[new, _NORMAL]
     length = np.linalg.norm(normals, axis=1, keepdims=True)
     if not (length > 1e-9).all():  # only pieces whose normals cancel inside a triangle get here
-        raise InvalidInputError("a union cut a triangle whose vertex normals cancel out: the pieces' normals "
-                                "must agree in direction within every triangle")
+        raise InvalidInputError(f"{name}: the union cut a triangle whose vertex normals cancel out: the "
+                                "pieces' normals must agree in direction within every triangle")
     props[new, _NORMAL] = normals / length
     if colors:
         block = slice(_FIXED, _FIXED + 3)
