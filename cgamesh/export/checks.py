@@ -7,6 +7,7 @@ the other writers call ``check_surfaces``.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from typing import NamedTuple
 
@@ -20,6 +21,12 @@ from cgamesh.meshing.mesh import SurfaceMesh
 # this from unit length is a bug upstream (SurfaceMesh promises unit normals), not rounding.
 NORMAL_LENGTH_TOLERANCE = 1e-3
 UP_AXES = ("z", "y")
+# Per-vertex attribute names: lower-case identifiers, so every format can name them (glTF
+# upper-cases them after an underscore, USD primvars and PLY properties take them as they are).
+ATTRIBUTE_NAME = re.compile(r"[a-z][a-z0-9_]*")
+# Colours a mesh op interpolated may stray from [0, 1] by rounding; more than this is a bug.
+COLOR_RANGE_SLACK = 1e-9
+FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 def check_arguments(path, surfaces: Sequence, up: str, meters_per_unit: float) -> float:
@@ -89,6 +96,37 @@ def normal_lengths(mesh: SurfaceMesh, path) -> np.ndarray:
     return length
 
 
+def check_channels(mesh: SurfaceMesh, path) -> None:
+    """The optional per-vertex channels: colours (V, 3) finite in [0, 1] (linear RGB), and
+    attributes (V,) under lower-case identifiers, finite and within float32's range (every
+    format stores them as float32)."""
+    v = mesh.vertex_count
+    where = f"cannot export {path}: surface {mesh.name!r}"
+    if mesh.colors is not None:
+        colors = np.asarray(mesh.colors)
+        if colors.shape != (v, 3):
+            raise ExportError(f"{where}: colors must have shape {(v, 3)}, got {colors.shape}")
+        bounds = column_bounds(colors.astype(np.float64, copy=False))
+        if not (np.isfinite(bounds).all() and bounds.min() >= -COLOR_RANGE_SLACK
+                and bounds.max() <= 1.0 + COLOR_RANGE_SLACK):
+            raise ExportError(f"{where}: colors must be finite linear RGB in [0, 1], got values in "
+                              f"[{bounds.min()}, {bounds.max()}]")
+    for name, values in (mesh.attributes or {}).items():
+        if not isinstance(name, str) or ATTRIBUTE_NAME.fullmatch(name) is None:
+            raise ExportError(f"{where}: attribute names must be lower-case identifiers "
+                              f"([a-z][a-z0-9_]*), got {name!r}")
+        values = np.asarray(values)
+        if values.shape != (v,):
+            raise ExportError(f"{where}: attribute {name!r} must have shape {(v,)}, got {values.shape}")
+        if not np.issubdtype(values.dtype, np.number):
+            raise ExportError(f"{where}: attribute {name!r} must be numbers, got {values.dtype}")
+        largest = float(np.abs(values).max(initial=0.0))  # NaN propagates
+        if not largest <= FLOAT32_MAX:
+            k = int(np.argmax(~(np.abs(values) <= FLOAT32_MAX)))
+            raise ExportError(f"{where}: attribute {name!r} must be finite and within float32's range, "
+                              f"vertex {k} has {values[k]}")
+
+
 def check_material(mesh: SurfaceMesh, material: Material, path) -> None:
     values = [*material.color, material.metallic, material.roughness]
     if len(material.color) != 3 or not all(np.isfinite(x) and 0.0 <= x <= 1.0 for x in values):
@@ -112,6 +150,7 @@ def check_surfaces(path, surfaces: Sequence[tuple[SurfaceMesh, Material]], up: s
         check_shapes(mesh, path)
         measured.append(check_values(mesh, path))
         check_material(mesh, material, path)
+        check_channels(mesh, path)
     return scale, measured
 
 

@@ -18,7 +18,14 @@ Options:
   with a dequantising node transform (translation = centre, uniform scale = half the largest
   extent), normals and tangents as normalized int8, UVs as normalized uint16 when they all lie
   in [0, 1] (float32 otherwise: a mesh without textures has no texture transform to carry a
-  UV scale). Vertex strides are padded to 4 bytes as glTF requires.
+  UV scale), vertex colours as normalized uint16 (16 bits: linear colours need more than 8 in
+  the darks). Vertex strides are padded to 4 bytes as glTF requires.
+
+Per-vertex channels (``SurfaceMesh.colors`` and ``.attributes``), when a mesh has them:
+``COLOR_0`` (VEC3, linear RGB: float32, or normalized uint16 when quantized) and one float32
+SCALAR application-specific attribute per named attribute, its name upper-cased after an
+underscore (``radius`` -> ``_RADIUS``), as glTF reserves for custom semantics; never quantized.
+Indices are uint16 when every index fits (below 65535, the primitive-restart value), else uint32.
 
 The document model is pygltflib's; the binary chunk is one numpy byte array that every
 attribute is computed into in place, and the containers are assembled here: pygltflib's own
@@ -40,8 +47,8 @@ import pygltflib as g
 
 from cgamesh.errors import ExportError
 from cgamesh.export.atomic import atomic_files, atomic_write
-from cgamesh.export.checks import (check_arguments, check_material, check_shapes, column_bounds,
-                                   normal_lengths)
+from cgamesh.export.checks import (check_arguments, check_channels, check_material, check_shapes,
+                                   column_bounds, normal_lengths)
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
 
@@ -132,6 +139,7 @@ def build_document(path, surfaces, *, up, meters_per_unit, source_units, tangent
     for mesh, material in surfaces:
         check_shapes(mesh, path)
         check_material(mesh, material, path)
+        check_channels(mesh, path)
         layouts.append(_Layout(mesh, tangents, quantize))
     blob = np.zeros(sum(layout.nbytes for layout in layouts), dtype=np.uint8)
 
@@ -169,7 +177,7 @@ class _Attribute:
 
     @property
     def type(self) -> str:
-        return {2: g.VEC2, 3: g.VEC3, 4: g.VEC4}[self.width]
+        return {1: g.SCALAR, 2: g.VEC2, 3: g.VEC3, 4: g.VEC4}[self.width]
 
 
 def _float(name: str, width: int) -> _Attribute:
@@ -194,11 +202,18 @@ class _Layout:
                 attributes.append(_Attribute("TANGENT", g.BYTE, np.dtype(np.int8), 4, 4, True))
             attributes.append(_Attribute("TEXCOORD_0", g.UNSIGNED_SHORT, np.dtype(np.uint16), 2, 4, True)
                               if unit_uvs else _float("TEXCOORD_0", 2))
+            if mesh.colors is not None:
+                attributes.append(_Attribute("COLOR_0", g.UNSIGNED_SHORT, np.dtype(np.uint16), 3, 8, True))
         else:
             attributes = [_float("POSITION", 3), _float("NORMAL", 3)]
             if tangents:
                 attributes.append(_float("TANGENT", 4))
             attributes.append(_float("TEXCOORD_0", 2))
+            if mesh.colors is not None:
+                attributes.append(_float("COLOR_0", 3))
+        # custom attributes: raw values, float32 in both modes
+        self.custom = {custom_name(name): name for name in sorted(mesh.attributes or {})}
+        attributes.extend(_float(semantic, 1) for semantic in self.custom)
         self.attributes = attributes
         # 65535 is the primitive-restart value for UNSIGNED_SHORT and must not be an index.
         self.index_dtype = np.dtype(np.uint16 if v <= 65535 else np.uint32)
@@ -289,6 +304,18 @@ def _fill_mesh(doc, blob, offset, mesh, layout, up, scale, path) -> g.Node:
         np.subtract(1.0, uvs[:, 1], out=uv_out[:, 1], casting="same_kind")
     accessor("TEXCOORD_0")
 
+    if "COLOR_0" in attributes:
+        colors = np.clip(np.asarray(mesh.colors, dtype=np.float64), 0.0, 1.0)  # range checked in check_channels
+        color_out = out("COLOR_0")
+        if attributes["COLOR_0"].normalized:
+            np.rint(colors * 65535.0, out=color_out, casting="unsafe")
+        else:
+            color_out[:] = colors
+        accessor("COLOR_0")
+    for semantic, name in layout.custom.items():
+        out(semantic)[:, 0] = mesh.attributes[name]
+        accessor(semantic)
+
     index_view, index_bytes = views["indices"]
     np.copyto(index_bytes[: layout.index_bytes].view(layout.index_dtype).reshape(-1, 3), mesh.faces,
               casting="unsafe")  # range checked in check_shapes
@@ -297,6 +324,11 @@ def _fill_mesh(doc, blob, offset, mesh, layout, up, scale, path) -> g.Node:
     accessors["indices"] = len(doc.accessors) - 1
     layout.accessors.update(accessors)
     return node
+
+
+def custom_name(name: str) -> str:
+    """The glTF semantic of a per-vertex attribute: ``radius`` -> ``_RADIUS``."""
+    return "_" + name.upper()
 
 
 def _fill_tangents(out, mesh, perm, sign, where) -> None:

@@ -7,9 +7,15 @@ file states them: its own frame and units, no axis swap and no scaling.
   and a material of that name in ``STEM.mtl`` beside it (diffuse colour ``Kd``). Both files
   are renamed into place together.
 - .ply: binary little-endian, every surface concatenated into one mesh, with vertex normals
-  and UVs (properties s, t).
+  and UVs (properties s, t). When any surface has vertex colours, every vertex gets 8-bit
+  sRGB-encoded ``red green blue alpha`` (the PLY convention; a surface without colours takes its
+  material's colour), and every per-vertex attribute that all surfaces carry is a float32 vertex
+  property of its name (``radius``, ``segment`` ...); an attribute missing from some surface is
+  not written (PLY has no "absent" value).
 - .stl: binary, every surface concatenated; STL stores triangles with face normals only, so
-  vertex normals and UVs are not written.
+  vertex normals, UVs, colours and attributes are not written.
+- .obj: OBJ has no standard per-vertex colour or attribute (the ``v x y z r g b`` extension is
+  not read by every tool), so colours and attributes are not written; the material's colour is.
 """
 
 from __future__ import annotations
@@ -25,6 +31,7 @@ from cgamesh.errors import ExportError
 from cgamesh.export.atomic import atomic_files, atomic_write
 from cgamesh.export.checks import check_surfaces
 from cgamesh.material import Material
+from cgamesh.meshing.colors import linear_to_srgb
 from cgamesh.meshing.mesh import SurfaceMesh
 
 SUFFIXES = (".obj", ".ply", ".stl")
@@ -85,8 +92,32 @@ def _concatenated(trimesh, surfaces, *, with_attributes: bool):
         return trimesh.Trimesh(vertices=positions, faces=faces, process=False, validate=False)
     normals = np.concatenate([mesh.normals for mesh, _ in surfaces])
     uvs = np.concatenate([mesh.uvs for mesh, _ in surfaces])
-    return trimesh.Trimesh(vertices=positions, faces=faces, vertex_normals=normals,
-                           visual=trimesh.visual.TextureVisuals(uv=uvs), process=False, validate=False)
+    if all(mesh.colors is None for mesh, _ in surfaces):
+        visual = trimesh.visual.TextureVisuals(uv=uvs)
+        vertex_attributes = {}
+    else:
+        # trimesh holds either UVs or colours as its visual: colours there, UVs as s, t below
+        visual = trimesh.visual.ColorVisuals(vertex_colors=_ply_colors(surfaces))
+        vertex_attributes = {"s": uvs[:, 0].astype(np.float32), "t": uvs[:, 1].astype(np.float32)}
+    shared = set.intersection(*(set(mesh.attributes or ()) for mesh, _ in surfaces))
+    for name in sorted(shared):
+        vertex_attributes[name] = np.concatenate([np.asarray(mesh.attributes[name], dtype=np.float32)
+                                                  for mesh, _ in surfaces])
+    return trimesh.Trimesh(vertices=positions, faces=faces, vertex_normals=normals, visual=visual,
+                           vertex_attributes=vertex_attributes, process=False, validate=False)
+
+
+def _ply_colors(surfaces) -> np.ndarray:
+    """(V, 4) uint8 sRGB-encoded RGBA of every vertex: its colour, or its material's."""
+    parts = []
+    for mesh, material in surfaces:
+        linear = mesh.colors if mesh.colors is not None else np.broadcast_to(
+            np.asarray(material.color, dtype=np.float64), (mesh.vertex_count, 3))
+        parts.append(np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0))
+    srgb = linear_to_srgb(np.concatenate(parts))
+    rgba = np.full((len(srgb), 4), 255, dtype=np.uint8)
+    rgba[:, :3] = np.rint(srgb * 255.0)
+    return rgba
 
 
 def _write_obj(trimesh, target: Path, surfaces) -> int:

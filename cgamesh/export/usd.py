@@ -21,6 +21,11 @@ become one point, so the mesh is watertight where the surface is. ``primvars:nor
 lost or averaged. st is the scene's UV as it is (USD's st origin is bottom-left, like ours).
 ``doubleSided`` is set for double-sided surfaces (ribbons).
 
+Per-vertex channels, when a mesh has them, follow the same rule ("vertex" on the welded points
+where the repeated vertices agree, indexed "faceVarying" otherwise): colours as
+``primvars:displayColor`` (color3f[], linear RGB, USD's own colour primvar) and each attribute
+as a float[] primvar of its name (``radius`` -> ``primvars:radius``), for shaders to read.
+
 .usdz: the crate file is written to scratch space (memory when there is a /dev/shm) and
 packaged as the usdz specification requires (``cgamesh.export.usdz``: uncompressed, 64-byte
 aligned, the layout usd-core's own Sdf.ZipFileWriter produces, in a fraction of its time).
@@ -48,6 +53,8 @@ SUFFIXES = (".usda", ".usdc", ".usd", ".usdz")
 # divided by their length first.
 UNIT_ENOUGH = 1e-12
 MATERIALS_SCOPE = "Materials"
+# Primvars this writer (or UsdGeom) defines itself: per-vertex attributes may not take these names.
+RESERVED_PRIMVARS = ("normals", "st", "displayColor", "displayOpacity")
 
 
 def write_usd(
@@ -74,7 +81,8 @@ def write_usd(
     scale, measured = check_surfaces(path, surfaces, up, meters_per_unit)
     pxr = _pxr()
     stage = build_stage(pxr, surfaces, up=up, meters_per_unit=scale, source_units=source_units,
-                        root=_root_name(pxr, target), y_up=suffix == ".usdz", measured=measured)
+                        root=_root_name(pxr, target), y_up=suffix == ".usdz", measured=measured,
+                        arkit=suffix == ".usdz")
     layer = stage.GetRootLayer()
     if suffix == ".usdz":
         with tempfile.TemporaryDirectory(prefix="cgamesh-usdz-", dir=_scratch_dir()) as folder:
@@ -135,10 +143,13 @@ def _root_name(pxr: _Pxr, target: Path) -> str:
 
 
 def build_stage(pxr: _Pxr, surfaces, *, up: str, meters_per_unit: float, source_units: str, root: str,
-                measured: list[Measured], y_up: bool = False):
+                measured: list[Measured], y_up: bool = False, arkit: bool = False):
     """An in-memory stage holding every surface (see the module docstring).
 
     ``measured``: each mesh's bounds and normal lengths, as ``check_surfaces`` measured them.
+
+    ``arkit``: only shaders the ARKit rules allow (a .usdz): vertex colours are then not wired
+    into the material (see ``_define_material``).
 
     ``y_up``: the stage must be +Y up (a .usdz, by the ARKit rules); a z-up scene then gets
     upAxis Y and a -90 degree rotation about X on the default prim, mapping (x, y, z) to
@@ -165,7 +176,8 @@ def build_stage(pxr: _Pxr, surfaces, *, up: str, meters_per_unit: float, source_
     scope = UsdGeom.Scope.Define(stage, root_path.AppendChild(scope_name)).GetPath()
     for (mesh, material), measures in zip(surfaces, measured):
         usd_mesh = _define_mesh(pxr, stage, root_path.AppendChild(mesh.name), mesh, measures)
-        usd_material = _define_material(pxr, stage, scope.AppendChild(mesh.name), material)
+        usd_material = _define_material(pxr, stage, scope.AppendChild(mesh.name), material,
+                                        vertex_colors=mesh.colors is not None and not arkit)
         binding = UsdShade.MaterialBindingAPI.Apply(usd_mesh.GetPrim())
         binding.Bind(usd_material)
     return stage
@@ -227,6 +239,16 @@ def _define_mesh(pxr: _Pxr, stage, prim_path, mesh: SurfaceMesh, measured: Measu
              repeated, first_of, faces)
     _primvar(pxr, primvars, "st", Sdf.ValueTypeNames.TexCoord2fArray, Vt.Vec2fArray,
              np.asarray(mesh.uvs, dtype=np.float32), keep, repeated, first_of, faces)
+    if mesh.colors is not None:
+        colors = np.clip(np.asarray(mesh.colors, dtype=np.float64), 0.0, 1.0).astype(np.float32)
+        _primvar(pxr, primvars, "displayColor", Sdf.ValueTypeNames.Color3fArray, Vt.Vec3fArray, colors, keep,
+                 repeated, first_of, faces)
+    for name in sorted(mesh.attributes or {}):
+        if name in RESERVED_PRIMVARS:
+            raise ExportError(f"cannot export to USD: surface {mesh.name!r}: an attribute cannot be named "
+                              f"{name!r}, the name of USD's own primvar")
+        _primvar(pxr, primvars, name, Sdf.ValueTypeNames.FloatArray, Vt.FloatArray,
+                 np.asarray(mesh.attributes[name], dtype=np.float32), keep, repeated, first_of, faces)
     return usd_mesh
 
 
@@ -243,12 +265,26 @@ def _primvar(pxr, primvars, name, value_type, array_type, values, keep, repeated
     primvar.SetIndices(Vt.IntArray.FromNumpy(faces.ravel()))
 
 
-def _define_material(pxr: _Pxr, stage, prim_path, material: Material):
+def _define_material(pxr: _Pxr, stage, prim_path, material: Material, vertex_colors: bool = False):
+    """A UsdPreviewSurface material. ``vertex_colors``: its diffuseColor reads the mesh's
+    ``displayColor`` primvar through a UsdPrimvarReader_float3 (the material's colour as the
+    fallback), since renderers shade a mesh with its bound material and would otherwise not
+    show the vertex colours. The ARKit rules allow only the float2 primvar reader, so a .usdz
+    keeps the plain material colour (its meshes still carry displayColor)."""
     Gf, Sdf, UsdShade = pxr.Gf, pxr.Sdf, pxr.UsdShade
     usd_material = UsdShade.Material.Define(stage, prim_path)
     shader = UsdShade.Shader.Define(stage, prim_path.AppendChild("PreviewSurface"))
     shader.CreateIdAttr("UsdPreviewSurface")
-    shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*map(float, material.color)))
+    diffuse = shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f)
+    color = Gf.Vec3f(*map(float, material.color))
+    diffuse.Set(color)
+    if vertex_colors:
+        reader = UsdShade.Shader.Define(stage, prim_path.AppendChild("DisplayColor"))
+        reader.CreateIdAttr("UsdPrimvarReader_float3")
+        reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("displayColor")
+        reader.CreateInput("fallback", Sdf.ValueTypeNames.Float3).Set(color)
+        diffuse.ConnectToSource(reader.ConnectableAPI(), "result", UsdShade.AttributeType.Output,
+                                Sdf.ValueTypeNames.Float3)
     shader.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(float(material.roughness))
     shader.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(float(material.metallic))
     usd_material.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")

@@ -210,6 +210,10 @@ def xatlas_atlas(meshes: list[SurfaceMesh], padding: int = 2) -> list[SurfaceMes
             tangents=None,
             uv_lengths=None,
             weld=first[inverse.ravel()],
+            # per-vertex channels follow their vertices into the split
+            colors=None if mesh.colors is None else np.asarray(mesh.colors)[source],
+            attributes=None if mesh.attributes is None else {
+                name: np.asarray(values)[source] for name, values in mesh.attributes.items()},
         ))
     return out
 

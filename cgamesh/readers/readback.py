@@ -13,6 +13,7 @@ from urllib.parse import unquote
 import numpy as np
 
 from cgamesh.errors import InvalidInputError
+from cgamesh.meshing.colors import srgb_to_linear
 from cgamesh.meshing.mesh import SurfaceMesh
 
 _GLTF_DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
@@ -49,6 +50,10 @@ def _gltf_blob(gltf, path: Path) -> bytes:
 def read_gltf(path: str | Path, world: bool = False) -> list[SurfaceMesh]:
     """Every mesh's first primitive; UVs back in SurfaceMesh's bottom-left origin (v = 1 - V).
 
+    ``COLOR_0`` becomes ``colors`` (RGB; an alpha channel is dropped) and every SCALAR
+    application-specific attribute ``_NAME`` an entry ``name`` of ``attributes``; other
+    attributes (TEXCOORD_1, JOINTS_0, vector-valued custom ones ...) are ignored.
+
     ``world``: positions and normals through the node's translation / rotation / scale.
     """
     import pygltflib
@@ -83,9 +88,22 @@ def read_gltf(path: str | Path, world: bool = False) -> list[SurfaceMesh]:
         if tangents is not None:
             tangents[:, :3] /= np.linalg.norm(tangents[:, :3], axis=1, keepdims=True)
         double_sided = bool(prim.material is not None and gltf.materials[prim.material].doubleSided)
+        colors, attributes = _gltf_channels(gltf, blob, prim.attributes)
         out.append(SurfaceMesh(gmesh.name or f"mesh{index}", positions, normals, uvs, faces, double_sided,
-                               tangents=tangents))
+                               tangents=tangents, colors=colors, attributes=attributes))
     return out
+
+
+def _gltf_channels(gltf, blob: bytes, attributes) -> tuple[np.ndarray | None, dict[str, np.ndarray] | None]:
+    """COLOR_0 as (V, 3) float64 RGB and the SCALAR ``_NAME`` attributes by lower-case name."""
+    colors = None
+    if getattr(attributes, "COLOR_0", None) is not None:
+        colors = gltf_accessor(gltf, blob, attributes.COLOR_0)[:, :3].astype(np.float64)
+    custom = {}
+    for semantic, index in vars(attributes).items():
+        if semantic.startswith("_") and index is not None and gltf.accessors[index].type == "SCALAR":
+            custom[semantic[1:].lower()] = gltf_accessor(gltf, blob, index)[:, 0].astype(np.float64)
+    return colors, custom or None
 
 
 def _quaternion_matrix(q) -> np.ndarray:
@@ -99,7 +117,9 @@ def _quaternion_matrix(q) -> np.ndarray:
 
 def read_usd(path: str | Path) -> list[SurfaceMesh]:
     """Every UsdGeom.Mesh of the stage, one stored vertex per triangle corner (USD's points
-    are welded; faceVarying normals and st differ per corner)."""
+    are welded; faceVarying normals and st differ per corner). ``primvars:displayColor``
+    becomes ``colors`` and every other authored scalar float primvar an entry of
+    ``attributes``; primvars of other types are ignored."""
     from cgamesh.optional import require
 
     require("pxr", "usd", "reading USD")
@@ -113,17 +133,28 @@ def read_usd(path: str | Path) -> list[SurfaceMesh]:
         if not prim.IsA(UsdGeom.Mesh):
             continue
         mesh = UsdGeom.Mesh(prim)
-        corners = expand_usd_mesh(mesh)
+        corners = expand_usd_mesh(mesh, channels=True)
         count = len(corners["points"])
+        attributes = {name[len(ATTRIBUTE_KEY):]: values[:, 0] for name, values in corners.items()
+                      if name.startswith(ATTRIBUTE_KEY)}
         out.append(SurfaceMesh(prim.GetName(), corners["points"], corners["normals"], corners["st"],
                                np.arange(count, dtype=np.int64).reshape(-1, 3),
-                               bool(mesh.GetDoubleSidedAttr().Get())))
+                               bool(mesh.GetDoubleSidedAttr().Get()), colors=corners.get("displayColor"),
+                               attributes=attributes or None))
     return out
 
 
-def expand_usd_mesh(mesh) -> dict[str, np.ndarray]:
-    """points, normals, st (3F, k) per triangle corner of a triangulated UsdGeom.Mesh."""
-    from pxr import UsdGeom
+# expand_usd_mesh's key prefix for the scalar float primvars it reads with channels=True
+ATTRIBUTE_KEY = "attribute:"
+
+
+def expand_usd_mesh(mesh, channels: bool = False) -> dict[str, np.ndarray]:
+    """points, normals, st (3F, k) per triangle corner of a triangulated UsdGeom.Mesh.
+
+    ``channels``: also displayColor (3F, 3) when authored, and every other authored float[]
+    primvar as ``"attribute:" + name`` (3F, 1).
+    """
+    from pxr import Sdf, UsdGeom
 
     points = np.asarray(mesh.GetPointsAttr().Get(), dtype=np.float64)
     counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get())
@@ -137,22 +168,40 @@ def expand_usd_mesh(mesh) -> dict[str, np.ndarray]:
         if not primvar or primvar.Get() is None:
             out[name] = np.zeros((len(indices), width))
             continue
-        values = np.asarray(primvar.ComputeFlattened(), dtype=np.float64)
-        interpolation = primvar.GetInterpolation()
-        if interpolation == UsdGeom.Tokens.vertex:
-            out[name] = values[indices]
-        elif interpolation == UsdGeom.Tokens.faceVarying:
-            out[name] = values
-        elif interpolation == UsdGeom.Tokens.uniform:
-            out[name] = np.repeat(values, 3, axis=0)
-        else:  # constant
-            out[name] = np.broadcast_to(values.reshape(-1, width)[:1], (len(indices), width)).copy()
+        out[name] = _corner_values(primvar, indices, width)
+    if channels:
+        for primvar in primvars.GetAuthoredPrimvars():
+            name = primvar.GetPrimvarName()
+            if primvar.Get() is None:
+                continue
+            if name == "displayColor":
+                out[name] = _corner_values(primvar, indices, 3)
+            elif name not in ("normals", "st") and primvar.GetTypeName() in (Sdf.ValueTypeNames.FloatArray,
+                                                                            Sdf.ValueTypeNames.DoubleArray):
+                out[ATTRIBUTE_KEY + name] = _corner_values(primvar, indices, 1)
     return out
+
+
+def _corner_values(primvar, indices: np.ndarray, width: int) -> np.ndarray:
+    """(3F, width) float64 values of a primvar at each triangle corner, by its interpolation."""
+    from pxr import UsdGeom
+
+    values = np.asarray(primvar.ComputeFlattened(), dtype=np.float64).reshape(-1, width)
+    interpolation = primvar.GetInterpolation()
+    if interpolation in (UsdGeom.Tokens.vertex, UsdGeom.Tokens.varying):
+        return values[indices]
+    if interpolation == UsdGeom.Tokens.faceVarying:
+        return values
+    if interpolation == UsdGeom.Tokens.uniform:
+        return np.repeat(values, 3, axis=0)
+    return np.broadcast_to(values[:1], (len(indices), width)).copy()  # constant
 
 
 def read_trimesh(path: str | Path) -> list[SurfaceMesh]:
     """OBJ / PLY / STL through trimesh, one mesh per geometry, with the file's vertex normals
-    (STL: the face normals, spread to the vertices) and UVs (zeros where the file has none)."""
+    (STL: the face normals, spread to the vertices) and UVs (zeros where the file has none).
+    A PLY file's 8-bit vertex colours (sRGB-encoded) come back as linear ``colors`` and its
+    other scalar vertex properties as ``attributes``."""
     from cgamesh.optional import require
 
     trimesh = require("trimesh", "formats", "reading OBJ / PLY / STL")
@@ -164,5 +213,28 @@ def read_trimesh(path: str | Path) -> list[SurfaceMesh]:
         normals = np.asarray(geometry.vertex_normals, dtype=np.float64)
         uv = getattr(geometry.visual, "uv", None)
         uvs = np.asarray(uv, dtype=np.float64) if uv is not None and len(uv) == len(positions) else np.zeros((len(positions), 2))
-        out.append(SurfaceMesh(str(name), positions, normals, uvs, faces))
+        colors, attributes = _ply_channels(geometry, len(positions))
+        out.append(SurfaceMesh(str(name), positions, normals, uvs, faces, colors=colors, attributes=attributes))
     return out
+
+
+# PLY vertex properties that are not per-vertex attributes
+_PLY_STANDARD = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha", "s", "t", "u", "v",
+                 "texture_u", "texture_v"}
+
+
+def _ply_channels(geometry, count: int) -> tuple[np.ndarray | None, dict[str, np.ndarray] | None]:
+    """Vertex colours (linear, from 8-bit sRGB) and extra scalar vertex properties of a PLY mesh."""
+    rgba = getattr(geometry, "vertex_attributes", {}).get("color")
+    if rgba is None and getattr(geometry.visual, "kind", None) == "vertex":
+        rgba = geometry.visual.vertex_colors
+    colors = None
+    if rgba is not None and len(rgba) == count:
+        colors = srgb_to_linear(np.asarray(rgba)[:, :3].astype(np.float64) / 255.0)
+    raw = geometry.metadata.get("_ply_raw", {}).get("vertex", {}).get("data")
+    attributes = {}
+    if raw is not None and raw.dtype.names is not None and len(raw) == count:
+        for field in raw.dtype.names:
+            if field not in _PLY_STANDARD and raw.dtype[field].shape == ():
+                attributes[field] = np.asarray(raw[field], dtype=np.float64)
+    return colors, attributes or None

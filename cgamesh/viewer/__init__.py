@@ -57,6 +57,8 @@ def page_data(scene, meshes: list[tuple[SurfaceMesh, Material]]) -> dict:
             "normals": _b64(mesh.normals @ AXIS[scene.up].T, np.float32),
             "uvs": _b64(np.c_[mesh.uvs[:, 0], 1.0 - mesh.uvs[:, 1]], np.float32),
             "indices": _b64(mesh.faces, np.uint32),
+            # linear RGB per vertex, shown through the material (three.js vertexColors)
+            "colors": None if mesh.colors is None else _b64(np.clip(mesh.colors, 0.0, 1.0), np.float32),
         })
     controls, interpolated = _cga_objects(scene)
     return {

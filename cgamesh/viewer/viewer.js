@@ -61,10 +61,13 @@
       geometry.setAttribute("normal", new THREE.BufferAttribute(decode(s.normals, Float32Array), 3));
       geometry.setAttribute("uv", new THREE.BufferAttribute(decode(s.uvs, Float32Array), 2));
       geometry.setIndex(new THREE.BufferAttribute(decode(s.indices, Uint32Array), 1));
+      if (s.colors) geometry.setAttribute("color", new THREE.BufferAttribute(decode(s.colors, Float32Array), 3));
       geometry.computeBoundingBox();
       box.union(geometry.boundingBox);
+      // vertex colours (linear RGB, as in glTF) replace the material's colour: white multiplies them
+      const base = s.colors ? new THREE.Color(1, 1, 1) : new THREE.Color(s.color[0], s.color[1], s.color[2]);
       const material = new THREE.MeshStandardMaterial({
-        color: new THREE.Color(s.color[0], s.color[1], s.color[2]), roughness: s.roughness, metalness: s.metallic,
+        color: base, roughness: s.roughness, metalness: s.metallic, vertexColors: Boolean(s.colors),
         side: s.double_sided ? THREE.DoubleSide : THREE.FrontSide,
       });
       material.userData.color = material.color.clone();
