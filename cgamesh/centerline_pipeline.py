@@ -128,6 +128,17 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
                       material=Material(color=(1.0, 1.0, 1.0)) if options.color_by != "none" else Material())
 
 
+def chain_count(lines: Centerlines) -> int:
+    """How many chains (tree) or polylines the input has, without splitting it."""
+    if not lines.is_tree:
+        return len(lines.offsets) - 1
+    parents = lines.parents
+    below = np.flatnonzero(parents >= 0)
+    children = np.bincount(parents[below], minlength=len(parents))
+    head = parents[below]
+    return int(np.count_nonzero((parents[head] < 0) | (children[head] != 1)))
+
+
 def _check_options(lines: Centerlines, options: TubeOptions) -> None:
     where = lines.source
     if options.up not in UP_AXES:
@@ -201,7 +212,7 @@ def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segm
     distinct = np.concatenate([[True], np.any(p[1:] != p[:-1], axis=1)])  # exact duplicates merged
     nodes, p, tube_radii = nodes[distinct], p[distinct], tube_radii[distinct]
     if len(nodes) < 2:
-        raise DegenerateGeometryError(f"{where}: skipped: fewer than two distinct points")
+        raise DegenerateGeometryError(f"{where}: expected at least two distinct points, got {len(nodes)}")
     t = node_tangents(p)
     tangents[nodes[-1]] = t[-1]
     tangents[nodes[0]] = np.where(segment_of[nodes[0]] == SOMA_SEGMENT, t[0], tangents[nodes[0]])
@@ -221,7 +232,7 @@ def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segm
         material=Material(), location=where, interpolation="motor")
     mesh = mesh_surface(spec, Resolution())
     if not (np.isfinite(mesh.positions).all() and np.isfinite(mesh.normals).all()):
-        raise DegenerateGeometryError(f"{where}: skipped: the mesh has non-finite vertices")
+        raise DegenerateGeometryError(f"{where}: expected a finite mesh, got non-finite vertices or normals")
     s = _node_parameter(mesh, len(nodes), options, p)
     grid = np.arange(len(nodes))
     attributes = {"radius": np.interp(s, grid, tube_radii), "segment": np.full(mesh.vertex_count, float(index))}

@@ -76,3 +76,37 @@ def readonly(array: np.ndarray) -> np.ndarray:
     array = np.array(array, copy=True, order="C")
     array.flags.writeable = False
     return array
+
+
+# Centreline file kinds by extension: (reader module, function, the format's own length unit).
+CENTERLINE_FORMATS = {
+    ".swc": ("cgamesh.inputs.swc", "read_swc", "um"),
+    ".trk": ("cgamesh.inputs.streamlines", "read_streamlines", "mm"),
+    ".tck": ("cgamesh.inputs.streamlines", "read_streamlines", "mm"),
+    ".trx": ("cgamesh.inputs.streamlines", "read_streamlines", "mm"),
+    ".npz": ("cgamesh.inputs.arrays", "read_npz", "m"),
+}
+
+
+def is_centerline_file(path) -> bool:
+    """Whether ``path``'s extension (case-insensitive) names a centreline format."""
+    import os
+
+    return os.path.splitext(os.fspath(path))[1].lower() in CENTERLINE_FORMATS
+
+
+def read_centerlines(path, units: str | None = None) -> Centerlines:
+    """Any centreline file by its extension; ``units`` overrides the format's own unit."""
+    import importlib
+    import os
+
+    from cgamesh.errors import InvalidInputError
+
+    suffix = os.path.splitext(os.fspath(path))[1].lower()
+    if suffix not in CENTERLINE_FORMATS:
+        raise InvalidInputError(f"{os.fspath(path)}: unknown input format {suffix or '(no extension)'!r}; expected "
+                                f"a scene file (.yaml, .yml) or one of {', '.join(CENTERLINE_FORMATS)}")
+    if units is not None and units not in METERS_PER_UNIT:
+        raise InvalidInputError(f"units must be one of {', '.join(METERS_PER_UNIT)}, got {units!r}")
+    module, function, default = CENTERLINE_FORMATS[suffix]
+    return getattr(importlib.import_module(module), function)(path, units=units or default)
