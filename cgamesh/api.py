@@ -30,7 +30,7 @@ from cgamesh.meshing.mesh import SurfaceMesh
 SCENE_SUFFIXES = (".yaml", ".yml")
 SCENE_OPTIONS = ("around", "along", "tolerance", "tangents")
 TUBE_OPTIONS = ("radius", "min_radius", "up", "around", "subdivide", "tolerance", "color_by", "split",
-                "watertight", "strict")
+                "watertight", "strict", "caps")
 
 
 @dataclass(frozen=True)
@@ -121,7 +121,7 @@ def load(path: str | os.PathLike[str], **options: Any) -> Meshes:
     Centreline options (``cgamesh.centerline_pipeline.TubeOptions``): ``radius``,
     ``min_radius``, ``units`` (nm, um, mm, cm, m; default the format's), ``up`` (x, y, z),
     ``around`` (8), ``subdivide`` (3) or ``tolerance``, ``color_by`` (none, radius,
-    direction, segment or a per-point field), ``split``, ``watertight``, ``strict``.
+    direction, segment or a per-point field), ``split``, ``watertight``, ``caps``, ``strict``.
     Mistakes raise ``cgamesh.errors.InvalidInputError`` with a one-line message.
     """
     name = os.fspath(path)

@@ -49,6 +49,7 @@ class TubeOptions:
     color_by:   none | radius | direction | segment | the name of a per-point scalar.
     split:      one mesh per chain or streamline (and one for the spheres) instead of one mesh.
     watertight: one closed 2-manifold mesh (capped tubes, spheres and soma united).
+    caps:       close every tube's ends with flat discs (implied by ``watertight``).
     strict:     a chain that cannot be meshed is an error instead of being skipped.
     """
 
@@ -62,6 +63,7 @@ class TubeOptions:
     split: bool = False
     watertight: bool = False
     strict: bool = False
+    caps: bool = False
 
 
 @dataclass(frozen=True)
@@ -228,7 +230,7 @@ def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segm
     spec = SurfaceSpec(
         name=f"{stem}_{index}", type="circles", curve="catmull_rom", tension=0.0, bias=0.0, continuity=0.0,
         closed=False, align=True, controls=controls, around=options.around if fixed else None,
-        along=along if fixed else None, tolerance=options.tolerance, caps=options.watertight,
+        along=along if fixed else None, tolerance=options.tolerance, caps=options.watertight or options.caps,
         material=Material(), location=where, interpolation="motor")
     mesh = mesh_surface(spec, Resolution())
     if not (np.isfinite(mesh.positions).all() and np.isfinite(mesh.normals).all()):
@@ -272,7 +274,7 @@ def _node_parameter(mesh: SurfaceMesh, count: int, options: TubeOptions, p: np.n
     columns = options.around + 1
     along = (count - 1) * (options.subdivide + 1) + 1
     grid = along * columns
-    caps = 2 * columns if options.watertight else 0
+    caps = 2 * columns if options.watertight or options.caps else 0
     if options.tolerance is None and mesh.vertex_count == grid + caps:
         s = np.empty(mesh.vertex_count)
         s[:grid] = np.repeat(np.arange(along) / (options.subdivide + 1), columns)
