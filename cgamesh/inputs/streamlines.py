@@ -52,13 +52,39 @@ def _read_nibabel(name: str):
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # nibabel warns where the header and the data disagree
-            tractogram = nib.streamlines.load(name).tractogram
+            loaded = nib.streamlines.load(name)
     except Exception as error:  # nibabel's HeaderError, DataError, struct and numpy errors
         raise InvalidInputError(f"{name}: expected a valid {os.path.splitext(name)[1]} file: "
                                 f"{_one_line(error)}") from None
+    tractogram = loaded.tractogram
     streamlines = tractogram.streamlines
+    # nibabel reads what the data holds; a header that counts otherwise is a damaged file.
+    stated = _stated_count(name, loaded.header)
+    if stated is not None and stated > 0 and stated != len(streamlines):
+        raise InvalidInputError(f"{name}: expected {int(stated)} streamlines as the header states, "
+                                f"the data holds {len(streamlines)}")
     per_point = {key: value.get_data() for key, value in tractogram.data_per_point.items()}
     return streamlines.get_data(), _boundaries(streamlines._offsets, streamlines._lengths), per_point
+
+
+def _stated_count(name: str, header: dict) -> int | None:
+    """The streamline count a .trk header states (0 or None: not stated).
+
+    nibabel overwrites the header's count with what it read, so it is read from the header's
+    bytes here (offset 988, in the byte order of the header size at 996). A .tck's ``count``
+    is not checked: writers that stream (MRtrix, MATLAB scripts) leave it stale in real files,
+    and the format ends the data with its own marker.
+    """
+    if name.lower().endswith(".tck"):
+        return None
+    import struct
+
+    with open(name, "rb") as f:
+        raw = f.read(1000)
+    if len(raw) < 1000:
+        return None
+    order = "<" if struct.unpack("<i", raw[996:1000])[0] == 1000 else ">"
+    return struct.unpack(order + "i", raw[988:992])[0]
 
 
 def _read_trx(name: str):
