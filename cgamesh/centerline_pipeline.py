@@ -235,6 +235,9 @@ def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segm
     mesh = mesh_surface(spec, Resolution())
     if not (np.isfinite(mesh.positions).all() and np.isfinite(mesh.normals).all()):
         raise DegenerateGeometryError(f"{where}: expected a finite mesh, got non-finite vertices or normals")
+    if options.watertight and not closed_and_oriented(mesh):
+        raise DegenerateGeometryError(f"{where}: expected a closed, consistently wound tube for the union, got one "
+                                      "that folds over itself")
     s = _node_parameter(mesh, len(nodes), options, p)
     grid = np.arange(len(nodes))
     attributes = {"radius": np.interp(s, grid, tube_radii), "segment": np.full(mesh.vertex_count, float(index))}
@@ -247,6 +250,19 @@ def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segm
         along_t = np.stack([np.interp(s, grid, t[:, k]) for k in range(3)], axis=1)
         colors = direction_colors(along_t / np.linalg.norm(along_t, axis=1, keepdims=True))
     return _with(mesh, name=f"{stem}_{_label_name(chain.label)}", attributes=attributes, colors=colors)
+
+
+def closed_and_oriented(mesh: SurfaceMesh) -> bool:
+    """Whether the welded mesh is closed with every edge used once each way (what a boolean
+    union needs); a tube that folds over itself has triangles wound against their neighbours."""
+    weld = mesh.weld if mesh.weld is not None else np.arange(mesh.vertex_count)
+    faces = weld[mesh.faces].astype(np.int64)
+    faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])]
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    forward = edges[:, 0] * mesh.vertex_count + edges[:, 1]
+    backward = edges[:, 1] * mesh.vertex_count + edges[:, 0]
+    unique, counts = np.unique(forward, return_counts=True)
+    return bool(np.all(counts == 1) and np.isin(backward, unique).all())
 
 
 def node_tangents(p: np.ndarray) -> np.ndarray:

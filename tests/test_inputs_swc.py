@@ -244,7 +244,6 @@ def test_watertight_neuron_part_is_one_closed_manifold_meshlab_accepts(tmp_path)
     meshes.export(path)
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(str(path))
-    ms.meshing_merge_close_vertices(threshold=pymeshlab.PercentageValue(0.0001))
     topology = ms.get_topological_measures()
     assert topology["boundary_edges"] == 0
     assert topology["non_two_manifold_edges"] == 0
