@@ -253,3 +253,36 @@ def test_watertight_neuron_part_is_one_closed_manifold_meshlab_accepts(tmp_path)
     # the union encloses at least the biggest piece: the soma of radius 2
     volume = ms.get_geometric_measures()["mesh_volume"]
     assert volume > 4.0 / 3.0 * np.pi * 2.0 ** 3 * 0.9
+
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+
+@st.composite
+def random_trees(draw):
+    """A forest of up to 60 nodes: each node's parent is an earlier node or -1; ids shuffled."""
+    n = draw(st.integers(1, 60))
+    parents = [-1] + [draw(st.integers(-1, i - 1)) if draw(st.booleans()) or i < 2 else i - 1 for i in range(1, n)]
+    ids = draw(st.permutations(list(range(1, 3 * n + 1))))[:n]
+    order = draw(st.permutations(list(range(n))))
+    return np.array(parents), np.array(ids), np.array(order)
+
+
+@settings(max_examples=60)
+@given(random_trees())
+def test_any_forest_in_any_record_order_parses_and_splits_into_its_edges(tree):
+    parents, ids, order = tree
+    n = len(parents)
+    rows = [f"{ids[i]} 3 {i} {i % 7} {i % 3} 0.5 {ids[parents[i]] if parents[i] >= 0 else -1}" for i in order]
+    lines = parse_swc("\n".join(rows) + "\n", "random.swc")
+    # back in the original numbering: node index k of the file is original node order[k]
+    original = order
+    np.testing.assert_array_equal(np.where(lines.parents >= 0, original[np.maximum(lines.parents, 0)], -1),
+                                  parents[original])
+    chains = split_tree(lines.parents)
+    covered = np.concatenate([chains.chain(i)[1:] for i in range(len(chains))]) if len(chains) else np.zeros(0)
+    assert sorted(covered.tolist()) == np.flatnonzero(lines.parents >= 0).tolist()
+    children = np.bincount(lines.parents[lines.parents >= 0], minlength=n)
+    for i in range(len(chains)):
+        nodes = chains.chain(i)
+        assert np.all(children[nodes[1:-1]] == 1) and children[nodes[-1]] != 1

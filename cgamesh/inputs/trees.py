@@ -93,7 +93,7 @@ def _members(parents: np.ndarray, firsts: np.ndarray) -> tuple[np.ndarray, np.nd
     order = np.lexsort((distance[members], chain))
     lengths = np.bincount(chain, minlength=len(firsts)) + 1  # + the head
     nodes = np.empty(int(lengths.sum()), dtype=np.int64)
-    begin = np.concatenate([[0], np.cumsum(lengths)[:-1]])
+    begin = np.cumsum(lengths) - lengths
     nodes[begin] = parents[firsts]
     body = np.ones(len(nodes), dtype=bool)
     body[begin] = False
