@@ -122,6 +122,7 @@ def test_importing_cgamesh_and_reading_swc_stays_light(tmp_path):
     assert result.stdout.strip() == "0 [] []", result.stdout + result.stderr
 
 
+@pytest.mark.slow
 def test_the_real_data_docs_page_runs_as_written(tmp_path, monkeypatch):
     page = (ROOT / "docs" / "real-data.md").read_text()
     blocks = re.findall(r"```python\n(.*?)```", page, flags=re.S)

@@ -48,6 +48,7 @@ def test_trx_reads_the_same_streamlines_as_the_trk_it_was_made_from(tmp_path):
     assert "scalar" in built.meshes[0].attributes
 
 
+@pytest.mark.slow
 def test_every_ring_on_a_node_is_that_node_s_circle_on_the_fornix():
     """Rings number (nodes - 1) * (K + 1) + 1 and every (K + 1)th is the node's circle, for
     every streamline of dipy's fornix (whatever interpolation carries the rings between)."""
@@ -95,6 +96,7 @@ def test_direction_colours_are_the_absolute_tangent():
     np.testing.assert_allclose(colors[2], [[np.sqrt(0.5), np.sqrt(0.5), 0]] * 9, atol=1e-12)  # the corner
 
 
+@pytest.mark.slow
 def test_the_fornix_through_the_command_line_into_gltf_and_usd(tmp_path, gltf_validate):
     from export_checks import pxr_or_skip, usd_compliance
     from gltf_validator import assert_clean

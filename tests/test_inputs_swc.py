@@ -172,6 +172,7 @@ def test_junctions_close_the_tree_without_notches():
     assert len(boundary_vertices(capped)) == 0
 
 
+@pytest.mark.slow
 def test_node_rings_pass_through_the_node_circles_of_a_real_neuron():
     """Every Kth + 1 ring of a chain's tube is its node's circle: centre, radius, plane."""
     path = realdata_files.smallest_neuron()
@@ -204,6 +205,7 @@ def test_node_rings_pass_through_the_node_circles_of_a_real_neuron():
     assert checked > 100
 
 
+@pytest.mark.slow
 def test_a_real_neuron_through_the_command_line_into_every_format(tmp_path, gltf_validate):
     from export_checks import check_usd_file, pxr_or_skip
     from gltf_validator import assert_clean
