@@ -228,6 +228,24 @@ def test_a_real_neuron_through_the_command_line_into_every_format(tmp_path, gltf
     meshes = [(mesh, built.material) for mesh in built.meshes]
     for ext in ("usda", "usdc", "usdz"):
         check_usd_file(tmp_path / f"neuron.{ext}", meshes, up="z", meters_per_unit=1e-6)
+    # closure on the real neuron: in the welded merged mesh every boundary edge is on an open end
+    # of a tube (its vertices on the circle of its chain's first or last node), at most two rings
+    # of `around` (8) edges per tube; ends that coincide exactly (collinear parent and child) weld
+    merged = built.meshes[0]
+    segment = merged.attributes["segment"]
+    tubes = len(np.unique(segment[segment >= 0]))
+    edges = boundary_vertices(merged)
+    assert 0 < len(edges) <= 2 * tubes * 8
+    lines = read_swc(source)
+    radii = np.maximum(lines.radii, 0.5)
+    chains = split_tree(lines.parents)
+    vertices = np.unique(edges)
+    ends = np.array([[chains.chain(int(k))[0], chains.chain(int(k))[-1]] for k in segment[vertices]])
+    second = np.array([chains.chain(int(k))[1] for k in segment[vertices]])
+    end_radii = np.stack([np.where(lines.kinds[ends[:, 0]] == 1, radii[second], radii[ends[:, 0]]),
+                          radii[ends[:, 1]]], axis=1)
+    distance = np.linalg.norm(merged.positions[vertices][:, None, :] - lines.points[ends], axis=2)
+    assert np.abs(distance - end_radii).min(axis=1).max() <= 1e-9 * np.abs(lines.points).max()
     import trimesh
 
     ply = trimesh.load(tmp_path / "neuron.ply", process=False)
