@@ -21,13 +21,13 @@ def union(pieces: Sequence[SurfaceMesh], name: str) -> SurfaceMesh:
     for piece in pieces:
         faces = (piece.weld if piece.weld is not None else np.arange(piece.vertex_count))[piece.faces]
         used, faces = np.unique(faces, return_inverse=True)
-        mesh = m3d.Mesh(vert_properties=np.ascontiguousarray(piece.positions[used], dtype=np.float32),
-                        tri_verts=np.ascontiguousarray(faces.reshape(-1, 3), dtype=np.uint32))
+        mesh = m3d.Mesh64(vert_properties=np.ascontiguousarray(piece.positions[used], dtype=np.float64),
+                          tri_verts=np.ascontiguousarray(faces.reshape(-1, 3), dtype=np.uint64))
         solid = m3d.Manifold(mesh)
         if solid.status() != m3d.Error.NoError:
             raise DegenerateGeometryError(f"{piece.name}: not a closed 2-manifold piece ({solid.status()})")
         solids.append(solid)
-    result = m3d.Manifold.batch_boolean(solids, m3d.OpType.Add).to_mesh()
+    result = m3d.Manifold.batch_boolean(solids, m3d.OpType.Add).to_mesh64()
     positions = np.asarray(result.vert_properties, dtype=np.float64)[:, :3]
     faces = np.asarray(result.tri_verts, dtype=np.int64)
     corner = positions[faces]
