@@ -101,7 +101,7 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     points = lines.points[:, [1, 2, 0]] if options.up == "x" else lines.points  # x up -> z up, a rotation
     up = "y" if options.up == "y" else "z"
     scalar = lines.scalars.get(options.color_by)
-    chains = _chains(lines)
+    chains, junctions = _chains(lines)
     soma = lines.kinds == SOMA if lines.kinds is not None else np.zeros(len(points), dtype=bool)
     tangents = np.zeros_like(points)
     tangents[:, 2] = 1.0
@@ -120,7 +120,7 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
         if piece is not None:
             pieces.append(piece)
         progress(chain.label)
-    spheres = _spheres(lines, chains, points, radii, soma, scalar, tangents, segment_of, options, stem)
+    spheres = _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem)
     if not pieces and not spheres:
         raise DegenerateGeometryError(f"{lines.source}: nothing to mesh: "
                                       f"{'; '.join(skipped[:3]) if skipped else 'no chain has two distinct points'}")
@@ -176,7 +176,8 @@ def _radii(lines: Centerlines, options: TubeOptions) -> np.ndarray:
     return radii
 
 
-def _chains(lines: Centerlines) -> list[_Chain]:
+def _chains(lines: Centerlines) -> tuple[list[_Chain], np.ndarray]:
+    """The chains (or streamlines) to mesh, and the junction nodes (none for polylines)."""
     if lines.is_tree:
         from cgamesh.inputs.trees import split_tree
 
@@ -190,9 +191,10 @@ def _chains(lines: Centerlines) -> list[_Chain]:
                      f"{word} {int(ids[0])}, {int(ids[1])}, ..., {int(ids[-1])} ({len(ids)} {word})")
             line = int(lines.lines[nodes[1]]) if lines.lines is not None else None
             chains.append(_Chain(label, line, nodes))
-        return chains
+        return chains, split.junctions
     offsets = lines.offsets
-    return [_Chain(f"streamline {i}", None, np.arange(offsets[i], offsets[i + 1])) for i in range(len(offsets) - 1)]
+    return ([_Chain(f"streamline {i}", None, np.arange(offsets[i], offsets[i + 1])) for i in range(len(offsets) - 1)],
+            np.zeros(0, dtype=np.int64))
 
 
 def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segment_of, lines: Centerlines,
@@ -301,18 +303,12 @@ def _node_parameter(mesh: SurfaceMesh, count: int, options: TubeOptions, p: np.n
     return np.interp(np.clip(mesh.uvs[:, 1], 0.0, 1.0) * length[-1], length, np.arange(count))
 
 
-def _spheres(lines, chains, points, radii, soma, scalar, tangents, segment_of, options, stem) -> list[SurfaceMesh]:
+def _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem) -> list[SurfaceMesh]:
     """The junction spheres (one mesh) and the soma spheres (one mesh), those that exist."""
     from cgamesh.meshing.junctions import uv_spheres
 
     meshes = []
-    groups = []
-    if lines.is_tree:
-        from cgamesh.inputs.trees import split_tree
-
-        junctions = split_tree(lines.parents).junctions
-        groups.append(("junctions", junctions[~soma[junctions]]))
-        groups.append(("soma", np.flatnonzero(soma)))
+    groups = [("junctions", junctions[~soma[junctions]]), ("soma", np.flatnonzero(soma))]
     for name, nodes in groups:
         if not len(nodes):
             continue
