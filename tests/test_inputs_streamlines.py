@@ -212,3 +212,29 @@ def test_units_and_up_axis(tmp_path):
 
     (mesh,) = read_gltf(path, world=True)
     np.testing.assert_allclose(mesh.positions, y_up.positions, atol=1e-6)  # float32 in the file
+
+
+def test_a_tractogram_through_the_api_into_every_format(tmp_path, gltf_validate):
+    from export_checks import check_usd_file, pxr_or_skip
+    from gltf_validator import assert_clean, validate_many
+
+    import cgamesh
+
+    pxr_or_skip()
+    gltf_validate  # the fixture fails under CI (skips loudly elsewhere) when the validator is missing
+    meshes = cgamesh.load(realdata_files.nibabel_file("standard.trk"), radius=0.3, color_by="direction")
+    assert meshes.skipped == () and len(meshes.surfaces) == 1
+    paths = {ext: tmp_path / f"standard.{ext}" for ext in ("glb", "gltf", "usda", "usdc", "usd", "usdz", "obj",
+                                                           "ply", "stl")}
+    for path in paths.values():
+        assert meshes.export(path) > 0
+    for report in validate_many([paths["glb"], paths["gltf"]]):
+        assert_clean(report)
+    for ext in ("usda", "usdc", "usd", "usdz"):
+        check_usd_file(paths[ext], list(meshes.surfaces), up="z", meters_per_unit=1e-3)
+    import trimesh
+
+    for ext in ("obj", "ply", "stl"):
+        loaded = trimesh.load(paths[ext], force="mesh", process=False)
+        np.testing.assert_allclose(loaded.bounds, [meshes.positions.min(axis=0), meshes.positions.max(axis=0)],
+                                   rtol=1e-6, atol=1e-6)
