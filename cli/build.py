@@ -10,6 +10,7 @@ from pathlib import Path
 
 from cgamesh.errors import InvalidInputError
 from cgamesh.export.registry import WRITERS, writer_for
+from cgamesh_cli import realdata
 from cgamesh_cli.arguments import positive_number, whole_number
 
 EXIT_QUALITY = 1  # --strict and a quality threshold broken
@@ -21,7 +22,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Mesh the CGA evolved surfaces of a scene file and export them.",
         epilog="other commands: cgamesh render | verify | check | view (see cgamesh COMMAND --help)",
     )
-    parser.add_argument("scene", help="the YAML scene file (format version 1)")
+    parser.add_argument("scene", help="the YAML scene file (format version 1), or a centreline file: "
+                                      ".swc, .trk, .tck, .trx, .npz")
     parser.add_argument("-o", "--output", required=True, action="append",
                         help=f"output file, repeatable; its extension picks the format: {', '.join(WRITERS)}")
     parser.add_argument("--around", type=whole_number(2), help="vertices around every circle, or across every ribbon (overrides the file)")
@@ -36,8 +38,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--report", metavar="REPORT.json",
                         help="also write the mesh-quality report (JSON) of the meshes built")
     parser.add_argument("--strict", action="store_true",
-                        help="with --report: exit 1 when a quality threshold is broken")
+                        help="with --report: exit 1 when a quality threshold is broken; centreline inputs: "
+                             "a segment that cannot be meshed stops the run (exit 2, nothing written)")
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    realdata.add_arguments(parser)
     return parser
 
 
@@ -49,6 +53,9 @@ def run(args: argparse.Namespace) -> str:
     from cgamesh.progress import Progress
     from cgamesh.inputs.scene import load_scene
 
+    if realdata.is_real_data(args.scene):
+        return realdata.run(args)
+    realdata.reject_for_scene(args)
     outputs = [Path(o) for o in args.output]
     for output in outputs:  # refused before any meshing: unknown formats, missing folders
         writer_for(output)

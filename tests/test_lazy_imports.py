@@ -42,3 +42,12 @@ def test_a_tolerance_build_imports_nothing_more(tmp_path):
 
 def forbidden(modules: list[str]) -> list[str]:
     return [name for name in modules if any(name == n or name.startswith(n + ".") for n in NEVER_FOR_GLB)]
+
+
+def test_an_swc_build_imports_no_tractography_or_boolean_library(tmp_path):
+    source = tmp_path / "neuron.swc"
+    source.write_text("1 1 0 0 0 1 -1\n2 3 0 0 3 0.5 1\n3 3 0 1 6 0.5 2\n4 3 1 0 6 0.5 2\n")
+    report = run_build(str(source), "-o", str(tmp_path / "neuron.glb"), "-q", "--color-by", "radius")
+    assert report["status"] == 0
+    assert forbidden(report["modules"]) == []
+    assert [m for m in report["modules"] if m.split(".")[0] in ("nibabel", "trx", "manifold3d")] == []

@@ -1,0 +1,206 @@
+"""The Python API: any input to meshes in one call, for notebooks and pipelines.
+
+    import cgamesh
+
+    neuron = cgamesh.load("neuron.swc", color_by="radius")        # SWC, .trk, .tck, .trx, .npz or a scene
+    neuron.positions, neuron.normals, neuron.uvs, neuron.faces   # plain numpy arrays
+    neuron.export("neuron.glb")                                   # any output format, written atomically
+
+    bundle = cgamesh.tubes([line_a, line_b], radii=0.25)          # polylines as (n, 3) arrays
+    tree = cgamesh.tubes(points, radii=r, parents=p)              # a skeleton: parent index, -1 for roots
+
+Both return a ``Meshes``. Nothing heavy is imported until it is needed: reading a tractogram
+imports nibabel, exporting USD imports usd-core, ``to_trimesh`` imports trimesh.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from cgamesh.errors import InvalidInputError
+from cgamesh.material import Material
+from cgamesh.meshing.mesh import SurfaceMesh
+
+SCENE_SUFFIXES = (".yaml", ".yml")
+SCENE_OPTIONS = ("around", "along", "tolerance", "tangents")
+TUBE_OPTIONS = ("radius", "min_radius", "up", "around", "subdivide", "tolerance", "color_by", "split",
+                "watertight", "strict", "caps")
+
+
+@dataclass(frozen=True)
+class Meshes:
+    """Meshes of one input with what the writers need to place them.
+
+    surfaces: each mesh with its material (one mesh for a merged or watertight centreline
+              input, one per surface of a scene, one per segment with ``split``).
+    up:       the up axis of the coordinates ("z" or "y"); units, meters_per_unit: their length unit.
+    skipped:  one line per centreline segment that could not be meshed (empty when all were).
+
+    The array properties join every surface into one mesh (faces shifted accordingly).
+    """
+
+    surfaces: tuple[tuple[SurfaceMesh, Material], ...]
+    up: str = "z"
+    units: str = "m"
+    meters_per_unit: float = 1.0
+    skipped: tuple[str, ...] = ()
+
+    @cached_property
+    def _joined(self) -> SurfaceMesh:
+        meshes = [mesh for mesh, _ in self.surfaces]
+        if len(meshes) == 1:
+            return meshes[0]
+        from cgamesh.meshing.merge import merge
+
+        return merge(meshes, "meshes")
+
+    @property
+    def positions(self) -> np.ndarray:
+        """(V, 3) float64 vertex positions, in ``units``, ``up`` the file's up axis."""
+        return self._joined.positions
+
+    @property
+    def normals(self) -> np.ndarray:
+        """(V, 3) float64 unit vertex normals."""
+        return self._joined.normals
+
+    @property
+    def uvs(self) -> np.ndarray:
+        """(V, 2) float64 texture coordinates (u around, v along)."""
+        return self._joined.uvs
+
+    @property
+    def faces(self) -> np.ndarray:
+        """(F, 3) integer vertex indices, counter-clockwise seen from the normals' side."""
+        return self._joined.faces
+
+    @property
+    def colors(self) -> np.ndarray | None:
+        """(V, 3) float64 linear RGB per vertex, or None when no colouring was asked for."""
+        return self._joined.colors
+
+    @property
+    def attributes(self) -> dict[str, np.ndarray]:
+        """Per-vertex values by name, each (V,) float64: ``radius``, ``segment`` and, colouring by
+        a field of the file, ``scalar`` (empty for scene files)."""
+        return dict(self._joined.attributes or {})
+
+    def export(self, path: str | os.PathLike[str], *, tangents: bool = False, quantize: bool = False) -> int:
+        """Write every surface to ``path`` in the format of its extension (.glb, .gltf, .usda,
+        .usdc, .usd, .usdz, .obj, .ply, .stl), atomically; returns the bytes written."""
+        from cgamesh.export.registry import write
+
+        return write(path, list(self.surfaces), up=self.up, meters_per_unit=self.meters_per_unit,
+                     source_units=self.units, tangents=tangents, quantize=quantize)
+
+    def to_trimesh(self):
+        """One ``trimesh.Trimesh`` of every surface (welded seams kept apart: UVs differ there),
+        with vertex normals, UVs and, when present, vertex colours."""
+        import trimesh
+
+        mesh = self._joined
+        visual = trimesh.visual.TextureVisuals(uv=mesh.uvs)
+        result = trimesh.Trimesh(vertices=mesh.positions, faces=mesh.faces, vertex_normals=mesh.normals,
+                                 visual=visual, process=False)
+        if mesh.colors is not None:
+            rgba = np.concatenate([np.clip(mesh.colors, 0.0, 1.0), np.ones((mesh.vertex_count, 1))], axis=1)
+            result.visual = trimesh.visual.ColorVisuals(result, vertex_colors=np.round(rgba * 255).astype(np.uint8))
+        return result
+
+
+def load(path: str | os.PathLike[str], **options: Any) -> Meshes:
+    """Mesh any input file: a scene (.yaml/.yml) or centrelines (.swc, .trk, .tck, .trx, .npz).
+
+    Scene options: ``around``, ``along``, ``tolerance``, ``tangents`` (as on the command line).
+    Centreline options (``cgamesh.centerline_pipeline.TubeOptions``): ``radius``,
+    ``min_radius``, ``units`` (nm, um, mm, cm, m; default the format's), ``up`` (x, y, z),
+    ``around`` (8), ``subdivide`` (3) or ``tolerance``, ``color_by`` (none, radius,
+    direction, segment or a per-point field), ``split``, ``watertight``, ``caps``, ``strict``.
+    Mistakes raise ``cgamesh.errors.InvalidInputError`` with a one-line message.
+    """
+    name = os.fspath(path)
+    if os.path.splitext(name)[1].lower() in SCENE_SUFFIXES:
+        _known(options, SCENE_OPTIONS)
+        from cgamesh.inputs.scene import load_scene
+        from cgamesh.pipeline import Resolution, mesh_scene
+
+        scene = load_scene(name)
+        resolution = Resolution(options.get("around"), options.get("along"), options.get("tolerance"))
+        surfaces = mesh_scene(scene, resolution, tangents=bool(options.get("tangents", False)))
+        return Meshes(tuple(surfaces), up=scene.up, units=scene.units, meters_per_unit=scene.meters_per_unit)
+    from cgamesh.inputs.centerlines import read_centerlines
+
+    units = options.pop("units", None)
+    _known(options, TUBE_OPTIONS)
+    return _mesh(read_centerlines(name, units=units), options)
+
+
+def tubes(polylines: np.ndarray | Sequence[np.ndarray], radii: float | np.ndarray | Sequence[np.ndarray] | None = None,
+          parents: np.ndarray | None = None, *, scalars: dict[str, np.ndarray] | None = None, units: str = "m",
+          name: str = "tubes", **options: Any) -> Meshes:
+    """Tubes along polylines, or along a tree of points.
+
+    polylines: a sequence of (n_i, 3) arrays (one tube each), or one (N, 3) array: a single
+               polyline, or with ``parents`` the points of a tree.
+    radii:     one radius for all, or per point: (N,) for a tree or a single polyline, or a
+               sequence of (n_i,) arrays matching ``polylines``.
+    parents:   (N,) parent index of each point, -1 for a root (several roots allowed).
+    scalars:   per-point values by name, in the layout of ``radii`` (for ``color_by=NAME``).
+    units:     the length unit of points and radii; ``name`` names the meshes and messages.
+    options:   as for ``load``'s centreline options.
+    """
+    from cgamesh.inputs.arrays import centerlines_from_arrays
+
+    _known(options, TUBE_OPTIONS)
+    arrays: dict[str, np.ndarray] = {}
+    single = isinstance(polylines, np.ndarray) or (len(polylines) and np.ndim(polylines[0]) == 1)
+    if parents is not None or single:
+        arrays["points"] = np.asarray(polylines, dtype=np.float64)
+        pieces = None
+    else:
+        pieces = [np.asarray(p, dtype=np.float64) for p in polylines]
+        if any(p.ndim != 2 or p.shape[1:] != (3,) for p in pieces):
+            raise InvalidInputError(f"{name}: expected polylines of shape (n, 3), got "
+                                    f"{[p.shape for p in pieces if p.ndim != 2 or p.shape[1:] != (3,)][0]}")
+        arrays["points"] = np.concatenate(pieces) if pieces else np.zeros((0, 3))
+    if parents is not None:
+        arrays["parents"] = np.asarray(parents)
+    else:
+        lengths = [len(p) for p in pieces] if pieces is not None else [len(arrays["points"])]
+        arrays["offsets"] = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
+    if radii is not None and np.ndim(radii) == 0 and not isinstance(radii, (list, tuple)):
+        options.setdefault("radius", float(radii))
+    elif radii is not None:
+        arrays["radii"] = _flat(radii, pieces, name, "radii")
+    for key, values in (scalars or {}).items():
+        if key in arrays:
+            raise InvalidInputError(f"{name}: a scalar cannot be named {key!r}")
+        arrays[key] = _flat(values, pieces, name, key)
+    return _mesh(centerlines_from_arrays(arrays, name, units), options)
+
+
+def _flat(values, pieces, name: str, key: str) -> np.ndarray:
+    if pieces is not None and isinstance(values, (list, tuple)) and len(values) == len(pieces) \
+            and all(np.ndim(v) == 1 for v in values):
+        return np.concatenate([np.asarray(v, dtype=np.float64) for v in values]) if values else np.zeros(0)
+    return np.asarray(values, dtype=np.float64).reshape(-1)
+
+
+def _mesh(lines, options: dict) -> Meshes:
+    from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+
+    built = mesh_centerlines(lines, TubeOptions(**options))
+    return Meshes(tuple((mesh, built.material) for mesh in built.meshes), up=built.up, units=built.units,
+                  meters_per_unit=built.meters_per_unit, skipped=built.skipped)
+
+
+def _known(options: dict, allowed: tuple[str, ...]) -> None:
+    unknown = sorted(set(options) - set(allowed))
+    if unknown:
+        raise InvalidInputError(f"unknown option {unknown[0]!r}; expected one of {', '.join(allowed)}")

@@ -1,0 +1,375 @@
+"""From centrelines (SWC skeletons, tractograms, arrays) to tube meshes: chains -> specs -> meshes.
+
+Each unbranched chain of a tree (cgamesh.inputs.trees), or each polyline, becomes one circle
+surface spec: a circle control per node (centre = the node, normal = the chain's tangent there
+by central differences, one-sided at the ends, radius = the node's radius clamped to the minimum
+radius), a Catmull-Rom curve through them, ``interpolation = "motor"``, and (nodes - 1) * (K + 1)
++ 1 rings along, so K rings fall between consecutive nodes and one on every node. The specs go
+through the same pipeline as a scene file's surfaces (cgamesh.pipeline.mesh_surface). Branch
+nodes are closed by spheres of their radius (cgamesh.meshing.junctions), a neuron's soma (SWC
+type 1 nodes) by spheres of its radius; then everything is merged into one mesh
+(cgamesh.meshing.merge), kept apart (``split``), or united into one closed surface
+(``watertight``, cgamesh.meshing.watertight). Per-vertex attributes ``radius`` and ``segment``
+(and ``scalar`` when colouring by a per-point field) are interpolated from the nodes along each
+tube, and colours computed from them (cgamesh.meshing.colors).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from cgamesh.errors import CgameshError, DegenerateGeometryError, InvalidInputError
+from cgamesh.inputs.centerlines import Centerlines
+from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
+from cgamesh.material import Material
+from cgamesh.meshing.mesh import SurfaceMesh
+
+UP_AXES = ("x", "y", "z")
+COLOR_MODES = ("none", "radius", "direction", "segment")  # or the name of a per-point scalar
+SOMA = 1  # SWC structure type
+SOMA_SEGMENT = -1.0  # the ``segment`` attribute of soma spheres
+
+
+@dataclass(frozen=True)
+class TubeOptions:
+    """How centrelines become tubes (the command line's real-data options).
+
+    radius:     a constant radius for every node (required when the input has no radii; it
+                replaces the file's radii when given).
+    min_radius: radii below it are raised to it (a radius of 0 is an error without it).
+    up:         which axis of the input points up: x, y or z.
+    around:     vertices around every tube and sphere (>= 3).
+    subdivide:  rings between consecutive nodes (>= 0); or ``tolerance``, a largest distance
+                from the true surface in the input's units, instead.
+    color_by:   none | radius | direction | segment | the name of a per-point scalar.
+    split:      one mesh per chain or streamline (and one for the spheres) instead of one mesh.
+    watertight: one closed 2-manifold mesh (capped tubes, spheres and soma united).
+    caps:       close every tube's ends with flat discs (implied by ``watertight``).
+    strict:     a chain that cannot be meshed is an error instead of being skipped.
+    """
+
+    radius: float | None = None
+    min_radius: float | None = None
+    up: str = "z"
+    around: int = 8
+    subdivide: int = 3
+    tolerance: float | None = None
+    color_by: str = "none"
+    split: bool = False
+    watertight: bool = False
+    strict: bool = False
+    caps: bool = False
+
+
+@dataclass(frozen=True)
+class TubeMeshes:
+    """The meshes of one input, ready for the writers, and what was skipped.
+
+    meshes:   one mesh (merged or watertight) or, with ``split``, one per chain plus the spheres.
+    skipped:  one line per chain that could not be meshed, naming its nodes or streamline.
+    up:       the writers' up axis ("z" or "y"; an x-up input was turned to z-up).
+    units, meters_per_unit: the input's length unit.
+    chains:   how many chains or streamlines the input has.
+    """
+
+    meshes: tuple[SurfaceMesh, ...]
+    skipped: tuple[str, ...]
+    up: str
+    units: str
+    meters_per_unit: float
+    chains: int
+    material: Material = field(default_factory=Material)
+
+
+@dataclass(frozen=True)
+class _Chain:
+    label: str
+    line: int | None
+    nodes: np.ndarray
+
+
+def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
+                     progress: Callable[[str], None] = lambda label: None) -> TubeMeshes:
+    """Tubes along every chain of ``lines`` with their junction and soma spheres (see the module)."""
+    _check_options(lines, options)
+    radii = _radii(lines, options)
+    points = lines.points[:, [1, 2, 0]] if options.up == "x" else lines.points  # x up -> z up, a rotation
+    up = "y" if options.up == "y" else "z"
+    scalar = lines.scalars.get(options.color_by)
+    chains, junctions = _chains(lines)
+    soma = lines.kinds == SOMA if lines.kinds is not None else np.zeros(len(points), dtype=bool)
+    tangents = np.zeros_like(points)
+    tangents[:, 2] = 1.0
+    segment_of = np.full(len(points), SOMA_SEGMENT)
+    pieces: list[SurfaceMesh] = []
+    skipped: list[str] = []
+    stem = _mesh_name(lines.source)
+    for index, chain in enumerate(chains):
+        try:
+            piece = _tube(chain, index, points, radii, soma, scalar, tangents, segment_of, lines, options, stem)
+        except CgameshError as error:
+            if options.strict:
+                raise
+            skipped.append(str(error))
+            piece = None
+        if piece is not None:
+            pieces.append(piece)
+        progress(chain.label)
+    spheres = _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem)
+    if not pieces and not spheres:
+        raise DegenerateGeometryError(f"{lines.source}: nothing to mesh: "
+                                      f"{'; '.join(skipped[:3]) if skipped else 'no chain has two distinct points'}")
+    meshes = _assemble(pieces, spheres, options, stem)
+    return TubeMeshes(meshes=tuple(meshes), skipped=tuple(skipped), up=up, units=lines.units,
+                      meters_per_unit=lines.meters_per_unit, chains=len(chains),
+                      material=Material(color=(1.0, 1.0, 1.0)) if options.color_by != "none" else Material())
+
+
+def chain_count(lines: Centerlines) -> int:
+    """How many chains (tree) or polylines the input has, without splitting it."""
+    if not lines.is_tree:
+        return len(lines.offsets) - 1
+    parents = lines.parents
+    below = np.flatnonzero(parents >= 0)
+    children = np.bincount(parents[below], minlength=len(parents))
+    head = parents[below]
+    return int(np.count_nonzero((parents[head] < 0) | (children[head] != 1)))
+
+
+def _check_options(lines: Centerlines, options: TubeOptions) -> None:
+    where = lines.source
+    if options.up not in UP_AXES:
+        raise InvalidInputError(f"up must be one of {', '.join(UP_AXES)}, got {options.up!r}")
+    if options.around < 3:
+        raise InvalidInputError(f"around must be >= 3, got {options.around}")
+    if options.subdivide < 0:
+        raise InvalidInputError(f"subdivide must be >= 0, got {options.subdivide}")
+    for key in ("radius", "min_radius", "tolerance"):
+        value = getattr(options, key)
+        if value is not None and not (np.isfinite(value) and value > 0.0):
+            raise InvalidInputError(f"{key} must be a finite number > 0, got {value}")
+    if options.color_by not in COLOR_MODES and options.color_by not in lines.scalars:
+        fields = ", ".join(lines.scalars) or "none"
+        raise InvalidInputError(f"{where}: color-by must be one of {', '.join(COLOR_MODES)} or a per-point "
+                                f"field of the file ({fields}), got {options.color_by!r}")
+
+
+def _radii(lines: Centerlines, options: TubeOptions) -> np.ndarray:
+    """Each node's radius: the constant one or the file's, raised to the minimum radius."""
+    if options.radius is not None:
+        radii = np.full(len(lines.points), float(options.radius))
+    elif lines.radii is None:
+        raise InvalidInputError(f"{lines.source}: the file has no radii; give a radius (--radius R)")
+    else:
+        radii = np.array(lines.radii, dtype=np.float64)
+    if options.min_radius is not None:
+        return np.maximum(radii, options.min_radius)
+    zero = np.flatnonzero(radii <= 0.0)
+    if zero.size:
+        raise InvalidInputError(f"{lines.source}: {lines.node_name(int(zero[0]))}: expected a radius > 0, got "
+                                f"{radii[zero[0]]:g} ({zero.size} such); give a minimum radius (--min-radius R)")
+    return radii
+
+
+def _chains(lines: Centerlines) -> tuple[list[_Chain], np.ndarray]:
+    """The chains (or streamlines) to mesh, and the junction nodes (none for polylines)."""
+    if lines.is_tree:
+        from cgamesh.inputs.trees import split_tree
+
+        split = split_tree(lines.parents)
+        chains = []
+        for i in range(len(split)):
+            nodes = split.chain(i)
+            ids = nodes if lines.ids is None else lines.ids[nodes]
+            word = "nodes" if lines.ids is not None else "points"
+            label = (f"{word} {', '.join(str(int(k)) for k in ids)}" if len(ids) <= 4 else
+                     f"{word} {int(ids[0])}, {int(ids[1])}, ..., {int(ids[-1])} ({len(ids)} {word})")
+            line = int(lines.lines[nodes[1]]) if lines.lines is not None else None
+            chains.append(_Chain(label, line, nodes))
+        return chains, split.junctions
+    offsets = lines.offsets
+    return ([_Chain(f"streamline {i}", None, np.arange(offsets[i], offsets[i + 1])) for i in range(len(offsets) - 1)],
+            np.zeros(0, dtype=np.int64))
+
+
+def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segment_of, lines: Centerlines,
+          options: TubeOptions, stem: str) -> SurfaceMesh | None:
+    """The tube of one chain with its attributes; None for a chain inside the soma alone."""
+    from cgamesh.pipeline import Resolution, mesh_surface
+
+    nodes = chain.nodes
+    tube_radii = radii[nodes]
+    inside = soma[nodes]
+    if inside.all():
+        return None  # the soma's spheres stand for it
+    if inside.any():  # a neurite leaving the soma starts with its own radius, not the soma's
+        outside = np.flatnonzero(~inside)
+        nearest = outside[np.abs(np.arange(len(nodes))[:, None] - outside[None, :]).argmin(axis=1)]
+        tube_radii = tube_radii[nearest]
+    where = Location(lines.source, chain.line, chain.label)
+    p = points[nodes]
+    distinct = np.concatenate([[True], np.any(p[1:] != p[:-1], axis=1)])  # exact duplicates merged
+    nodes, p, tube_radii = nodes[distinct], p[distinct], tube_radii[distinct]
+    if len(nodes) < 2:
+        raise DegenerateGeometryError(f"{where}: expected at least two distinct points, got {len(nodes)}")
+    t = node_tangents(p)
+    tangents[nodes[-1]] = t[-1]
+    tangents[nodes[0]] = np.where(segment_of[nodes[0]] == SOMA_SEGMENT, t[0], tangents[nodes[0]])
+    segment_of[nodes[-1]] = index
+    segment_of[nodes[0]] = np.where(segment_of[nodes[0]] == SOMA_SEGMENT, index, segment_of[nodes[0]])
+    controls = tuple(
+        CircleControl(center=tuple(c), normal=tuple(n), radius=float(r), through=None, weight=1.0,
+                      location=Location(lines.source, None if lines.lines is None else int(lines.lines[k]),
+                                        f"{chain.label}: {lines.node_name(int(k))}"))
+        for c, n, r, k in zip(p.tolist(), t.tolist(), tube_radii, nodes))
+    along = (len(nodes) - 1) * (options.subdivide + 1) + 1
+    fixed = options.tolerance is None
+    spec = SurfaceSpec(
+        name=f"{stem}_{index}", type="circles", curve="catmull_rom", tension=0.0, bias=0.0, continuity=0.0,
+        closed=False, align=True, controls=controls, around=options.around if fixed else None,
+        along=along if fixed else None, tolerance=options.tolerance, caps=options.watertight or options.caps,
+        material=Material(), location=where, interpolation="motor")
+    mesh = mesh_surface(spec, Resolution())
+    if not (np.isfinite(mesh.positions).all() and np.isfinite(mesh.normals).all()):
+        raise DegenerateGeometryError(f"{where}: expected a finite mesh, got non-finite vertices or normals")
+    if options.watertight and not closed_and_oriented(mesh):
+        raise DegenerateGeometryError(f"{where}: expected a closed, consistently wound tube for the union, got one "
+                                      "that folds over itself")
+    s = _node_parameter(mesh, len(nodes), options, p)
+    grid = np.arange(len(nodes))
+    attributes = {"radius": np.interp(s, grid, tube_radii), "segment": np.full(mesh.vertex_count, float(index))}
+    if scalar is not None:
+        attributes["scalar"] = np.interp(s, grid, scalar[nodes])
+    colors = None
+    if options.color_by == "direction":
+        from cgamesh.meshing.colors import direction_colors
+
+        along_t = np.stack([np.interp(s, grid, t[:, k]) for k in range(3)], axis=1)
+        colors = direction_colors(along_t / np.linalg.norm(along_t, axis=1, keepdims=True))
+    return _with(mesh, name=f"{stem}_{_label_name(chain.label)}", attributes=attributes, colors=colors)
+
+
+def closed_and_oriented(mesh: SurfaceMesh) -> bool:
+    """Whether the welded mesh is closed with every edge used once each way (what a boolean
+    union needs); a tube that folds over itself has triangles wound against their neighbours."""
+    weld = mesh.weld if mesh.weld is not None else np.arange(mesh.vertex_count)
+    faces = weld[mesh.faces].astype(np.int64)
+    faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])]
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    forward = edges[:, 0] * mesh.vertex_count + edges[:, 1]
+    backward = edges[:, 1] * mesh.vertex_count + edges[:, 0]
+    unique, counts = np.unique(forward, return_counts=True)
+    return bool(np.all(counts == 1) and np.isin(backward, unique).all())
+
+
+def node_tangents(p: np.ndarray) -> np.ndarray:
+    """Unit tangents (n, 3) of a polyline of distinct consecutive points: central differences,
+    one-sided at the ends, and one-sided where the central one vanishes (a turn back)."""
+    forward = np.diff(p, axis=0)
+    t = np.empty_like(p)
+    t[0], t[-1] = forward[0], forward[-1]
+    t[1:-1] = p[2:] - p[:-2]
+    length = np.linalg.norm(t, axis=1)
+    back = length <= 1e-12 * (1.0 + np.abs(p).max(axis=1))
+    back[[0, -1]] = False
+    t[1:-1][back[1:-1]] = forward[:-1][back[1:-1]]
+    return t / np.linalg.norm(t, axis=1, keepdims=True)
+
+
+def _node_parameter(mesh: SurfaceMesh, count: int, options: TubeOptions, p: np.ndarray) -> np.ndarray:
+    """Each vertex's place along the chain in node units (0 at the first node, count - 1 at the last).
+
+    On a fixed-resolution grid ring k lies at t = k / (K + 1) exactly (rings are spaced evenly
+    in the curve's parameter, one on every node); caps take their end's value. Otherwise
+    (tolerance-driven rings) v, which grows with arc length along the tube, is matched to the
+    nodes' arc length along the polyline.
+    """
+    columns = options.around + 1
+    along = (count - 1) * (options.subdivide + 1) + 1
+    grid = along * columns
+    caps = 2 * columns if options.watertight or options.caps else 0
+    if options.tolerance is None and mesh.vertex_count == grid + caps:
+        s = np.empty(mesh.vertex_count)
+        s[:grid] = np.repeat(np.arange(along) / (options.subdivide + 1), columns)
+        s[grid: grid + caps // 2] = 0.0
+        s[grid + caps // 2:] = count - 1
+        return s
+    length = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+    return np.interp(np.clip(mesh.uvs[:, 1], 0.0, 1.0) * length[-1], length, np.arange(count))
+
+
+def _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem) -> list[SurfaceMesh]:
+    """The junction spheres (one mesh) and the soma spheres (one mesh), those that exist."""
+    from cgamesh.meshing.junctions import uv_spheres
+
+    meshes = []
+    groups = [("junctions", junctions[~soma[junctions]]), ("soma", np.flatnonzero(soma))]
+    for name, nodes in groups:
+        if not len(nodes):
+            continue
+        mesh = uv_spheres(points[nodes], radii[nodes], options.around, name=f"{stem}_{name}")
+        per = mesh.vertex_count // len(nodes)
+        attributes = {"radius": np.repeat(radii[nodes], per), "segment": np.repeat(segment_of[nodes], per)}
+        if name == "soma":
+            attributes["segment"][:] = SOMA_SEGMENT
+        if scalar is not None:
+            attributes["scalar"] = np.repeat(scalar[nodes], per)
+        colors = None
+        if options.color_by == "direction":
+            from cgamesh.meshing.colors import direction_colors
+
+            colors = direction_colors(np.repeat(tangents[nodes], per, axis=0))
+        meshes.append(_with(mesh, attributes=attributes, colors=colors))
+    return meshes
+
+
+def _assemble(pieces: list[SurfaceMesh], spheres: list[SurfaceMesh], options: TubeOptions,
+              stem: str) -> list[SurfaceMesh]:
+    every = pieces + spheres
+    if options.watertight:
+        from cgamesh.meshing.watertight import union
+
+        meshes = [union(every, stem)]
+    elif options.split:
+        meshes = every
+    else:
+        from cgamesh.meshing.merge import merge
+
+        meshes = [merge(every, stem)]
+    return _colored(meshes, options)
+
+
+def _colored(meshes: list[SurfaceMesh], options: TubeOptions) -> list[SurfaceMesh]:
+    """Colours from the attributes over all meshes at once (one colour scale for a split output)."""
+    mode = options.color_by
+    if mode in ("none", "direction") or not all(m.attributes for m in meshes):
+        return meshes
+    from cgamesh.meshing import colors
+
+    key = mode if mode in ("radius", "segment") else "scalar"
+    if mode == "segment":
+        return [_with(m, colors=colors.segment_colors(m.attributes["segment"])) for m in meshes]
+    lo = min(float(m.attributes[key].min()) for m in meshes)
+    hi = max(float(m.attributes[key].max()) for m in meshes)
+    return [_with(m, colors=colors.colormap(m.attributes[key], "viridis", lo, hi)) for m in meshes]
+
+
+def _with(mesh: SurfaceMesh, **changes) -> SurfaceMesh:
+    from dataclasses import replace
+
+    return replace(mesh, **changes)
+
+
+def _mesh_name(source: str) -> str:
+    """A mesh name from the file's stem, valid in every output format ([A-Za-z_][A-Za-z0-9_]*)."""
+    stem = re.sub(r"[^A-Za-z0-9_]", "_", Path(source).stem) or "tubes"
+    return stem if re.match(r"[A-Za-z_]", stem) else f"_{stem}"
+
+
+def _label_name(label: str) -> str:
+    return re.sub(r"_+", "_", re.sub(r"[^A-Za-z0-9]", "_", label.split(" (")[0])).strip("_")

@@ -1,0 +1,112 @@
+"""``cgamesh neuron.swc -o neuron.glb``, ``cgamesh bundle.trk -o bundle.glb --radius 0.25``: real-data inputs.
+
+The build command (cli/build.py) hands inputs whose extension names a centreline format
+(.swc, .trk, .tck, .trx, .npz) to ``run`` here; these options are added to its parser. A chain
+that cannot be meshed is skipped with one line on stderr and exit status 3 (``--keep-going``,
+the default), or stops the run with status 2 and nothing written (``--strict``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from cgamesh.errors import InvalidInputError
+from cgamesh_cli.arguments import positive_number, whole_number
+
+EXIT_SKIPPED = 3
+UNITS = ("nm", "um", "mm", "cm", "m")
+REAL_DATA_OPTIONS = ("radius", "min_radius", "units", "up", "subdivide", "color_by", "split", "watertight",
+                     "keep_going")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of centreline inputs, in a group of their own."""
+    group = parser.add_argument_group("centreline inputs (.swc, .trk, .tck, .trx, .npz)")
+    group.add_argument("--radius", type=positive_number, help="a constant tube radius (required where the file has none)")
+    group.add_argument("--min-radius", type=positive_number, help="raise smaller radii (and radius 0) to this")
+    group.add_argument("--units", choices=UNITS, help="the file's length unit (default: SWC um, trk/tck/trx mm, npz m)")
+    group.add_argument("--up", choices=("x", "y", "z"), help="which axis of the file points up (default z)")
+    group.add_argument("--subdivide", type=whole_number(0), help="rings between consecutive nodes (default 3)")
+    group.add_argument("--color-by", metavar="none|radius|direction|segment|SCALAR",
+                       help="vertex colours: by radius, |tangent| RGB, segment, or a per-point field of the file")
+    group.add_argument("--split", action="store_true", help="one mesh per segment / streamline instead of one mesh")
+    group.add_argument("--watertight", action="store_true",
+                       help="one closed 2-manifold surface (capped tubes, junctions and soma united)")
+    group.add_argument("--keep-going", action="store_true",
+                       help="skip segments that cannot be meshed, exit 3 (the default; --strict stops instead)")
+
+
+def is_real_data(path: str) -> bool:
+    from cgamesh.inputs.centerlines import is_centerline_file
+
+    return is_centerline_file(path)
+
+
+def reject_for_scene(args: argparse.Namespace) -> None:
+    """A scene file with an option of centreline inputs is a mistake worth one line."""
+    given = [name for name in REAL_DATA_OPTIONS if getattr(args, name, None) not in (None, False)]
+    if given:
+        option = "--" + given[0].replace("_", "-")
+        raise InvalidInputError(f"{option} applies to centreline inputs (.swc, .trk, .tck, .trx, .npz), "
+                                f"not to the scene file {args.scene}")
+
+
+def run(args: argparse.Namespace) -> str | int:
+    """Read, mesh and write a centreline input; the summary, or EXIT_SKIPPED after printing it."""
+    from cgamesh.centerline_pipeline import TubeOptions, chain_count, mesh_centerlines
+    from cgamesh.export.registry import write, writer_for
+    from cgamesh.inputs.centerlines import read_centerlines
+    from cgamesh.progress import Progress
+
+    outputs = [Path(o) for o in args.output]
+    for output in outputs:
+        writer_for(output)
+        if not output.parent.is_dir():
+            raise InvalidInputError(f"cannot write {output}: directory {output.parent} does not exist")
+    if args.along is not None:
+        raise InvalidInputError("--along applies to scene files; for centreline inputs give --subdivide K "
+                                "(rings between consecutive nodes)")
+    if args.keep_going and args.strict:
+        raise InvalidInputError("--keep-going and --strict exclude each other")
+    if args.tolerance is not None and (args.subdivide is not None or args.around is not None):
+        raise InvalidInputError("--tolerance cannot be combined with --around or --subdivide")
+    if args.watertight and args.split:
+        raise InvalidInputError("--watertight makes one surface; it cannot be combined with --split")
+    start = time.perf_counter()
+    lines = read_centerlines(args.scene, units=args.units)
+    options = TubeOptions(radius=args.radius, min_radius=args.min_radius, up=args.up or "z",
+                          around=8 if args.around is None else args.around,
+                          subdivide=3 if args.subdivide is None else args.subdivide, tolerance=args.tolerance,
+                          color_by=args.color_by or "none", split=args.split, watertight=args.watertight,
+                          strict=args.strict)
+    with Progress(chain_count(lines), enabled=not args.quiet) as progress:
+        built = mesh_centerlines(lines, options, progress=progress.advance)
+    surfaces = [(mesh, built.material) for mesh in built.meshes]
+    written = [write(output, surfaces, up=built.up, meters_per_unit=built.meters_per_unit, source_units=built.units,
+                     tangents=args.tangents, quantize=args.quantize) for output in outputs]
+    failures = []
+    if args.report:
+        from cgamesh_cli.build import _write_report
+
+        failures = _write_report(args.report, list(built.meshes), args.scene)
+    seconds = time.perf_counter() - start
+    vertices = sum(m.vertex_count for m in built.meshes)
+    triangles = sum(m.triangle_count for m in built.meshes)
+    kind = "streamlines" if lines.offsets is not None else "segments"
+    skipped = f" ({len(built.skipped)} skipped)" if built.skipped else ""
+    summary = "\n".join(
+        f"{output}: {built.chains} {kind}{skipped}, {len(built.meshes)} mesh{'es' if len(built.meshes) != 1 else ''}, "
+        f"{vertices} vertices, {triangles} triangles, {seconds:.2f} s, {size} bytes"
+        for output, size in zip(outputs, written))
+    for line in built.skipped:
+        print(f"cgamesh: skipped: {line}", file=sys.stderr)
+    if failures:
+        print("cgamesh: quality: " + "; ".join(failures), file=sys.stderr)
+    if built.skipped or (args.strict and failures):
+        if not args.quiet:
+            print(summary)
+        return EXIT_SKIPPED if built.skipped else 1
+    return summary
