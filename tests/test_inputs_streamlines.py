@@ -88,12 +88,16 @@ def test_scalars_become_attributes_and_colours_between_their_extremes():
 def test_direction_colours_are_the_absolute_tangent():
     line = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 1, 0], [2, 2, 0]])
     from cgamesh.api import tubes
+    from cgamesh.meshing.colors import srgb_to_linear
 
     meshes = tubes([line], radii=0.1, color_by="direction", around=8, subdivide=0, split=True)
     colors = meshes.colors.reshape(-1, 9, 3)
     np.testing.assert_allclose(colors[0], [[1, 0, 0]] * 9, atol=1e-12)  # first node: along x
     np.testing.assert_allclose(colors[-1], [[0, 1, 0]] * 9, atol=1e-12)  # last node: along y
-    np.testing.assert_allclose(colors[2], [[np.sqrt(0.5), np.sqrt(0.5), 0]] * 9, atol=1e-12)  # the corner
+    # the corner: |t| is the displayed (sRGB) colour, stored linear like every mesh colour
+    corner = srgb_to_linear(np.array([np.sqrt(0.5), np.sqrt(0.5), 0.0]))
+    assert 0.45 < corner[0] < 0.46
+    np.testing.assert_allclose(colors[2], [corner] * 9, atol=1e-12)
 
 
 @pytest.mark.slow
