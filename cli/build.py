@@ -24,21 +24,39 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("scene", help="the YAML scene file (format version 1)")
     parser.add_argument("-o", "--output", required=True, action="append",
                         help=f"output file, repeatable; its extension picks the format: {', '.join(WRITERS)}")
-    parser.add_argument("--around", type=whole_number(2), help="vertices around every circle, or across every ribbon (overrides the file)")
-    parser.add_argument("--along", type=whole_number(2), help="rings along every surface (overrides the file)")
-    parser.add_argument("--tolerance", type=positive_number,
-                        help="largest distance of every mesh from its true surface, in file units "
-                             "(instead of a resolution; overrides the file)")
-    parser.add_argument("--tangents", action="store_true",
-                        help="glTF: write a TANGENT attribute (so normal maps work)")
-    parser.add_argument("--quantize", action="store_true",
-                        help="glTF: store positions, normals and UVs in 16 / 8 bits (KHR_mesh_quantization)")
+    add_meshing_options(parser)
     parser.add_argument("--report", metavar="REPORT.json",
                         help="also write the mesh-quality report (JSON) of the meshes built")
     parser.add_argument("--strict", action="store_true",
                         help="with --report: exit 1 when a quality threshold is broken")
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     return parser
+
+
+def add_meshing_options(parser: argparse.ArgumentParser) -> tuple[str, ...]:
+    """Add the options that shape each mesh to ``parser``; their names (argparse dests).
+
+    Shared with ``cgamesh batch``, which forwards them, as a plain dict, to every input.
+    """
+    group = parser.add_argument_group("meshing options")
+    actions = [
+        group.add_argument("--around", type=whole_number(2), help="vertices around every circle, or across every ribbon (overrides the file)"),
+        group.add_argument("--along", type=whole_number(2), help="rings along every surface (overrides the file)"),
+        group.add_argument("--tolerance", type=positive_number,
+                           help="largest distance of every mesh from its true surface, in file units "
+                                "(instead of a resolution; overrides the file)"),
+        group.add_argument("--tangents", action="store_true",
+                           help="glTF: write a TANGENT attribute (so normal maps work)"),
+        group.add_argument("--quantize", action="store_true",
+                           help="glTF: store positions, normals and UVs in 16 / 8 bits (KHR_mesh_quantization)"),
+    ]
+    return tuple(action.dest for action in actions)
+
+
+def check_meshing_options(options: dict) -> None:
+    """Refuse combinations of the meshing options that contradict each other."""
+    if options.get("tolerance") is not None and (options.get("around") is not None or options.get("along") is not None):
+        raise InvalidInputError("--tolerance cannot be combined with --around or --along")
 
 
 def run(args: argparse.Namespace) -> str:
@@ -58,8 +76,7 @@ def run(args: argparse.Namespace) -> str:
         raise InvalidInputError(f"cannot write {args.report}: directory {Path(args.report).parent} does not exist")
     if args.strict and args.report is None:
         raise InvalidInputError("--strict needs --report REPORT.json")
-    if args.tolerance is not None and (args.around is not None or args.along is not None):
-        raise InvalidInputError("--tolerance cannot be combined with --around or --along")
+    check_meshing_options(vars(args))
     start = time.perf_counter()
     scene = load_scene(args.scene)
     with Progress(len(scene.surfaces), enabled=not args.quiet) as progress:
