@@ -53,12 +53,6 @@ def add_meshing_options(parser: argparse.ArgumentParser) -> tuple[str, ...]:
     return tuple(action.dest for action in actions)
 
 
-def check_meshing_options(options: dict) -> None:
-    """Refuse combinations of the meshing options that contradict each other."""
-    if options.get("tolerance") is not None and (options.get("around") is not None or options.get("along") is not None):
-        raise InvalidInputError("--tolerance cannot be combined with --around or --along")
-
-
 def run(args: argparse.Namespace) -> str:
     """Build and write every output; returns the summary lines (one per output), or the exit
     status 1 after printing them when --strict finds a quality threshold broken."""
@@ -76,7 +70,8 @@ def run(args: argparse.Namespace) -> str:
         raise InvalidInputError(f"cannot write {args.report}: directory {Path(args.report).parent} does not exist")
     if args.strict and args.report is None:
         raise InvalidInputError("--strict needs --report REPORT.json")
-    check_meshing_options(vars(args))
+    if args.tolerance is not None and (args.around is not None or args.along is not None):
+        raise InvalidInputError("--tolerance cannot be combined with --around or --along")
     start = time.perf_counter()
     scene = load_scene(args.scene)
     with Progress(len(scene.surfaces), enabled=not args.quiet) as progress:

@@ -1,0 +1,67 @@
+"""Where a batch runs: a Dask client for the caller's client, an existing scheduler, or a
+cluster on this machine made for the run.
+
+Each worker runs one task at a time (one thread), so a worker's memory is that of one
+single-file run; ``memory_limit`` bounds it (Dask's nanny restarts a worker that goes past it,
+and the scheduler hands its task to another worker, then reports it as failed).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+from cgamesh.optional import require
+
+PURPOSE = "cgamesh batch"
+
+
+def distributed():
+    """The ``dask.distributed`` module, or the one-line error naming the ``batch`` extra."""
+    require("dask", "batch", PURPOSE)
+    return require("dask.distributed", "batch", PURPOSE)
+
+
+def scheduler_address(scheduler: str | None) -> str | None:
+    """The scheduler to use: the one given, else Dask's setting (DASK_SCHEDULER_ADDRESS), else none."""
+    if scheduler:
+        return scheduler
+    import dask
+
+    return dask.config.get("scheduler-address", None) or None
+
+
+@contextmanager
+def open_client(client=None, *, scheduler: str | None = None, workers: int | None = None,
+                memory_limit: str | int | None = "auto", retries: int = 2) -> Iterator[tuple[object, bool]]:
+    """``(client, on_cluster)``: the caller's client, one connected to ``scheduler``, or a
+    ``LocalCluster`` of ``workers`` processes (default one per core; ``workers=1`` runs in
+    this process), closed again on exit."""
+    dask_distributed = distributed()
+    if client is not None:
+        yield client, True
+        return
+    address = scheduler_address(scheduler)
+    if address:
+        from cgamesh.errors import InvalidInputError
+
+        try:
+            connected = dask_distributed.Client(address, timeout="10s")
+        except (OSError, TimeoutError) as error:
+            raise InvalidInputError(f"cannot reach the Dask scheduler at {address}: {error}") from None
+        with connected:
+            yield connected, True
+        return
+    import dask
+
+    count = workers or os.cpu_count() or 1
+    # A task whose worker dies is handed to another worker this many times before it is
+    # reported as failed (the scheduler's setting; an existing cluster keeps its own).
+    with dask.config.set({"distributed.scheduler.allowed-failures": retries}):
+        cluster = dask_distributed.LocalCluster(
+            n_workers=count, threads_per_worker=1, processes=count > 1, memory_limit=memory_limit,
+            dashboard_address=None, silence_logs=logging.ERROR)
+    with cluster, dask_distributed.Client(cluster) as local:
+        yield local, False
