@@ -58,10 +58,13 @@ def open_client(client=None, *, scheduler: str | None = None, workers: int | Non
 
     count = workers or os.cpu_count() or 1
     # A task whose worker dies is handed to another worker this many times before it is
-    # reported as failed (the scheduler's setting; an existing cluster keeps its own).
-    with dask.config.set({"distributed.scheduler.allowed-failures": retries}):
+    # reported as failed; and a worker holds only the task it runs (no queue of its own), so a
+    # worker that dies takes no other input's attempt with it. Both are the scheduler's
+    # settings: an existing cluster keeps its own (see the README).
+    with dask.config.set({"distributed.scheduler.allowed-failures": retries,
+                          "distributed.scheduler.worker-saturation": 1.0}):
         cluster = dask_distributed.LocalCluster(
             n_workers=count, threads_per_worker=1, processes=count > 1, memory_limit=memory_limit,
-            dashboard_address=None, silence_logs=logging.ERROR)
+            dashboard_address=":0", silence_logs=logging.ERROR)
     with cluster, dask_distributed.Client(cluster) as local:
         yield local, False

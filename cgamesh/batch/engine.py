@@ -32,7 +32,7 @@ def run_batch(inputs: str | os.PathLike | Sequence[str | os.PathLike], outdir: s
               **options) -> BatchSummary:
     """Mesh every input into ``outdir`` (see the package docstring); returns the summary."""
     from cgamesh.batch.cluster import distributed
-    from cgamesh.export.registry import writer_for
+    from cgamesh.export.registry import WRITERS
 
     distributed()  # the missing extra is reported before anything else
     if isinstance(inputs, (str, os.PathLike)):
@@ -43,7 +43,9 @@ def run_batch(inputs: str | os.PathLike | Sequence[str | os.PathLike], outdir: s
     if not formats:
         raise InvalidInputError("no output format given; expected e.g. glb or glb,usdz")
     for fmt in formats:
-        writer_for(f"output.{fmt}")
+        if f".{fmt}" not in WRITERS:
+            raise InvalidInputError(f"unknown output format {fmt!r}; expected some of "
+                                    f"{', '.join(w.lstrip('.') for w in WRITERS)}")
     check_options(options)
     options = normalised(options)
     start = time.perf_counter()

@@ -61,6 +61,7 @@ def run_job(source: str, outputs: Sequence[str], options: Mapping) -> dict:
         record["sha256"] = file_sha256(source)
         for output in outputs:
             Path(output).parent.mkdir(parents=True, exist_ok=True)
+            remove_stale_temporaries(Path(output))
         record.update(mesh_input(Path(source), [Path(o) for o in outputs], options))
     except CgameshError as error:
         record.update(status="failed", reason=one_line(str(error)))
@@ -68,6 +69,13 @@ def run_job(source: str, outputs: Sequence[str], options: Mapping) -> dict:
         record.update(status="failed", reason=one_line(f"{error.filename or source}: {error.strerror or error}"))
     record["seconds"] = time.perf_counter() - start
     return record
+
+
+def remove_stale_temporaries(output: Path) -> None:
+    """Remove the temporary files a killed earlier run left beside ``output`` (hidden names of
+    cgamesh.export.atomic: ``.NAME.<random>.tmp``); each output belongs to one task only."""
+    for stale in output.parent.glob(f".{output.name}.*.tmp*"):
+        stale.unlink(missing_ok=True)
 
 
 def file_sha256(path: str | os.PathLike) -> str:
