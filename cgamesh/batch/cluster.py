@@ -68,3 +68,27 @@ def open_client(client=None, *, scheduler: str | None = None, workers: int | Non
             dashboard_address=":0", silence_logs=logging.ERROR)
     with cluster, dask_distributed.Client(cluster) as local:
         yield local, False
+
+
+def check_workers(client, version: str) -> int:
+    """The number of workers, after making sure each one runs this version of cgamesh: a worker
+    that cannot import the task's code would never run it, and the batch would wait forever."""
+    from cgamesh.errors import InvalidInputError
+
+    def probe():  # defined here, so that it is sent by value: it must run where cgamesh is absent
+        try:
+            from cgamesh.batch.manifest import tool_version
+        except ImportError as error:
+            return f"no cgamesh ({error})"
+        return tool_version()
+
+    answers = client.run(probe)
+    if not answers:
+        raise InvalidInputError(f"no Dask workers are connected to the scheduler at {client.scheduler.address}; "
+                                "start some with: dask worker ADDRESS --nthreads 1")
+    wrong = {address: answer for address, answer in answers.items() if answer != version}
+    if wrong:
+        address, answer = next(iter(wrong.items()))
+        raise InvalidInputError(f"{len(wrong)} of {len(answers)} Dask workers do not run {version} (the worker at "
+                                f"{address} has {answer}); install the same cgamesh, with its batch extra, on every worker")
+    return len(answers)

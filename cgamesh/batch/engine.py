@@ -82,7 +82,7 @@ def _run_pending(pending: Sequence[Input], outdir, options: dict, version: str, 
                  records: dict[str, InputRecord], *, client, scheduler, workers, memory_limit, retries, progress,
                  on_record, job) -> int:
     """Run the tasks of ``pending``, filling ``records`` and the manifest; the number of workers."""
-    from cgamesh.batch.cluster import open_client
+    from cgamesh.batch.cluster import check_workers, open_client
     from cgamesh.progress import Progress
 
     with open_client(client, scheduler=scheduler, workers=workers, memory_limit=memory_limit,
@@ -90,7 +90,7 @@ def _run_pending(pending: Sequence[Input], outdir, options: dict, version: str, 
             Progress(len(pending), enabled=progress) as bar:
         if progress and on_cluster and getattr(active, "dashboard_link", None):
             print(f"cgamesh: batch: dashboard {active.dashboard_link}", file=sys.stderr)
-        worker_count = len(active.scheduler_info().get("workers", {})) or 1
+        worker_count = check_workers(active, version)
         last_save = time.perf_counter()
         try:
             for item, outcome in execute(active, pending, options, job, retries):
