@@ -47,8 +47,7 @@ def run(args: argparse.Namespace):
 
     if not args.inputs and not args.listing:
         raise InvalidInputError("batch: no inputs; give files, folders, glob patterns or --manifest FILE")
-    options = {name: getattr(args, name) for name in build_parser().meshing_options
-               if getattr(args, name) not in (None, False)}
+    options = {name: getattr(args, name) for name in build_parser().meshing_options}
     summary = run_batch(args.inputs, args.outdir, formats=args.format.split(","), listing=args.listing,
                         force=args.force, workers=args.workers, scheduler=args.scheduler, retries=args.retries,
                         memory_limit=args.memory_limit, progress=not (args.quiet or args.json), **options)

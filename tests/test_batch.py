@@ -273,6 +273,20 @@ def test_the_command_line_exit_codes_and_json(dataset, tmp_path, capsys):
     assert "no input files found" in capsys.readouterr().err
 
 
+def test_the_command_runs_on_an_existing_scheduler(dataset, client, tmp_path, monkeypatch, capsys):
+    folder, good, _, reference = dataset
+    address = client.scheduler.address
+    assert main(["batch", str(folder / good[0]), "-o", str(tmp_path / "a"), "--scheduler", address, *CLI_OPTIONS]) == 0
+    assert "on 2 workers" in capsys.readouterr().out
+    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", address)  # Dask's own setting, as `dask worker` users have it
+    assert main(["batch", str(folder / good[1]), "-o", str(tmp_path / "b"), *CLI_OPTIONS, "-q"]) == 0
+    for out, name in ((tmp_path / "a", good[0]), (tmp_path / "b", good[1])):
+        glb = Path(name).with_suffix(".glb")
+        assert (out / glb.name).read_bytes() == (reference / glb).read_bytes()
+    assert main(["batch", str(folder / good[0]), "-o", str(tmp_path / "c"), "--scheduler", "tcp://127.0.0.1:1"]) == 2
+    assert "cannot reach the Dask scheduler at tcp://127.0.0.1:1" in capsys.readouterr().err
+
+
 def test_without_dask_the_command_names_the_extra(dataset, tmp_path, monkeypatch, capsys):
     folder, good, _, _ = dataset
     for module in ("dask", "dask.distributed", "distributed"):
@@ -311,6 +325,7 @@ def test_discovery_files_folders_globs_and_listings(tmp_path):
         discover([tmp_path / "c" / "*.json"])
 
 
+@pytest.mark.slow
 def test_the_benchmark_runs_at_a_tiny_size(tmp_path):
     result = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_batch.py"), "--inputs", "6",
                              "--trivial", "20", "--workers", "1,2", "--around", "6", "--along", "12"],

@@ -30,7 +30,7 @@ def scheduler_address(scheduler: str | None) -> str | None:
         return scheduler
     import dask
 
-    return dask.config.get("scheduler-address", None) or None
+    return dask.config.get("scheduler-address", None) or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
 
 
 @contextmanager

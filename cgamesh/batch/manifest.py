@@ -31,9 +31,9 @@ def tool_version() -> str:
 
 
 def normalised(options: Mapping) -> dict:
-    """Options as the manifest stores them (JSON types, sorted keys), so they compare equal
-    after a round trip through the file."""
-    return json.loads(json.dumps(dict(options), sort_keys=True))
+    """Options as the manifest stores them (JSON types, sorted keys, without those left unset
+    as None), so they compare equal after a round trip through the file."""
+    return json.loads(json.dumps({k: v for k, v in options.items() if v is not None}, sort_keys=True))
 
 
 class Manifest:
