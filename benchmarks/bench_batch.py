@@ -130,7 +130,7 @@ def main() -> None:
         inputs = make_inputs(sources, args.inputs, scratch / "inputs")
         print(f"{len(inputs)} inputs copied from {len(sources)} source files ({', '.join(sorted({s.suffix for s in sources}))}), "
               f"{args.around} x {args.along}, format {args.format}; {os.cpu_count()} cores here")
-        rates, outputs, overhead = {}, {}, None
+        rates, outputs, cpu, overhead = {}, {}, {}, None
         for count in counts:
             cluster = distributed.LocalCluster(n_workers=count, threads_per_worker=1, processes=True,
                                                dashboard_address=":0", silence_logs=logging.ERROR)
@@ -144,9 +144,11 @@ def main() -> None:
                 rates[count] = len(inputs) / wall
                 outputs[count] = {Path(r.input): Path(r.outputs[0]) for r in summary.records}
                 task_mean = sum(r.seconds for r in summary.records) / len(inputs)
+                cpu[count] = sum(r.cpu_seconds for r in summary.records) / len(inputs)
                 print(f"{count} worker{'s' if count > 1 else ' '}: {wall:6.2f} s, {rates[count]:7.1f} inputs/s, "
-                      f"{wall / len(inputs) * 1e3:6.1f} ms per input wall, {task_mean * 1e3:6.1f} ms per task, "
-                      f"{sum(r.vertices for r in summary.records)} vertices")
+                      f"{wall / len(inputs) * 1e3:6.1f} ms per input wall; per task {task_mean * 1e3:6.1f} ms wall, "
+                      f"{cpu[count] * 1e3:6.1f} ms processor; {sum(r.vertices for r in summary.records)} vertices; "
+                      f"load average {os.getloadavg()[0]:.1f}")
                 if count == counts[0] and args.trivial:
                     trivial = make_inputs([sources[0]], args.trivial, scratch / "trivial")
                     start = time.perf_counter()
@@ -180,6 +182,12 @@ def main() -> None:
           f"{efficiency:.0%} parallel efficiency, {args.cores_per_machine} cores per machine: "
           f"{machines} machine{'s' if machines != 1 else ''} to finish in an hour "
           f"({CONNECTOME * per_input / HOUR:.2f} core-hours)")
+    cpu_machines = math.ceil(CONNECTOME * (cpu[counts[0]] + (overhead or 0.0)) / (HOUR * args.cores_per_machine))
+    print(f"projection from processor time per task plus engine overhead (a machine of idle cores): "
+          f"{cpu_machines} machine{'s' if cpu_machines != 1 else ''}")
+    if os.getloadavg()[0] > (os.cpu_count() or 1) * 0.75:
+        print(f"note: load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores: other processes share "
+              "them, so the workers' scaling measured here is a lower bound")
     if all(s.suffix.lower() in (".yaml", ".yml") for s in sources):
         print("(these are scene files: pass --source with SWC neurons for a connectome's own per-neuron cost)")
 

@@ -148,5 +148,5 @@ def _record(item: Input, status: str, outcome: dict) -> InputRecord:
     return InputRecord(
         input=str(item.path), name=item.name, status=status, reason=outcome.get("reason", ""),
         outputs=tuple(str(o) for o in item.outputs), sha256=outcome.get("sha256", ""),
-        seconds=float(outcome.get("seconds", 0.0)), vertices=int(outcome.get("vertices", 0)),
+        seconds=float(outcome.get("seconds", 0.0)), cpu_seconds=float(outcome.get("cpu_seconds", 0.0)), vertices=int(outcome.get("vertices", 0)),
         bytes=int(outcome.get("bytes", 0)))

@@ -9,7 +9,8 @@ from dataclasses import asdict, dataclass
 @dataclass(frozen=True)
 class InputRecord:
     """One input's outcome. ``status`` is "done", "skipped" (its outputs were current) or
-    "failed" (``reason`` says why, on one line). ``seconds`` is the task's own time; the
+    "failed" (``reason`` says why, on one line). ``seconds`` is the task's own wall time and
+    ``cpu_seconds`` its processor time; the
     counts are those of the run that made the outputs (for a skipped input, an earlier one)."""
 
     input: str
@@ -19,6 +20,7 @@ class InputRecord:
     outputs: tuple[str, ...] = ()
     sha256: str = ""
     seconds: float = 0.0
+    cpu_seconds: float = 0.0
     vertices: int = 0
     bytes: int = 0
 
