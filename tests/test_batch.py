@@ -283,8 +283,20 @@ def test_the_command_runs_on_an_existing_scheduler(dataset, client, tmp_path, mo
     for out, name in ((tmp_path / "a", good[0]), (tmp_path / "b", good[1])):
         glb = Path(name).with_suffix(".glb")
         assert (out / glb.name).read_bytes() == (reference / glb).read_bytes()
-    assert main(["batch", str(folder / good[0]), "-o", str(tmp_path / "c"), "--scheduler", "tcp://127.0.0.1:1"]) == 2
+    import dask
+
+    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
+        assert main(["batch", str(folder / good[0]), "-o", str(tmp_path / "c"), "--scheduler", "tcp://127.0.0.1:1"]) == 2
     assert "cannot reach the Dask scheduler at tcp://127.0.0.1:1" in capsys.readouterr().err
+
+
+def test_a_local_cluster_has_single_threaded_workers_within_the_memory_limit():
+    from cgamesh.batch.cluster import open_client
+
+    with open_client(workers=1, memory_limit="300MB", retries=1) as (local, on_cluster):
+        workers = local.scheduler_info()["workers"].values()
+        assert not on_cluster
+        assert [(w["nthreads"], w["memory_limit"]) for w in workers] == [(1, 300_000_000)]
 
 
 def test_without_dask_the_command_names_the_extra(dataset, tmp_path, monkeypatch, capsys):

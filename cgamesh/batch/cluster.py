@@ -47,8 +47,10 @@ def open_client(client=None, *, scheduler: str | None = None, workers: int | Non
     if address:
         from cgamesh.errors import InvalidInputError
 
-        try:
-            connected = dask_distributed.Client(address, timeout="10s")
+        import dask
+
+        try:  # Dask's connect timeout (distributed.comm.timeouts.connect, 30 s unless set)
+            connected = dask_distributed.Client(address, timeout=dask.config.get("distributed.comm.timeouts.connect"))
         except (OSError, TimeoutError) as error:
             raise InvalidInputError(f"cannot reach the Dask scheduler at {address}: {error}") from None
         with connected:
