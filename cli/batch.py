@@ -12,6 +12,7 @@ from cgamesh_cli.arguments import whole_number
 from cgamesh_cli.build import add_meshing_options
 
 EXIT_SOME_FAILED = 3
+EXIT_INTERRUPTED = 130  # the shell's status for Ctrl-C
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -48,9 +49,14 @@ def run(args: argparse.Namespace):
     if not args.inputs and not args.listing:
         raise InvalidInputError("batch: no inputs; give files, folders, glob patterns or --manifest FILE")
     options = {name: getattr(args, name) for name in build_parser().meshing_options}
-    summary = run_batch(args.inputs, args.outdir, formats=args.format.split(","), listing=args.listing,
-                        force=args.force, workers=args.workers, scheduler=args.scheduler, retries=args.retries,
-                        memory_limit=args.memory_limit, progress=not (args.quiet or args.json), **options)
+    try:
+        summary = run_batch(args.inputs, args.outdir, formats=args.format.split(","), listing=args.listing,
+                            force=args.force, workers=args.workers, scheduler=args.scheduler, retries=args.retries,
+                            memory_limit=args.memory_limit, progress=not (args.quiet or args.json), **options)
+    except KeyboardInterrupt:
+        print("cgamesh: batch: interrupted; the manifest records the inputs that finished, and the same "
+              "command continues from there", file=sys.stderr)
+        return EXIT_INTERRUPTED
     for record in summary.failures:
         reason = record.reason if record.reason.startswith(record.input) else f"{record.input}: {record.reason}"
         print(f"cgamesh: batch: failed: {reason}", file=sys.stderr)

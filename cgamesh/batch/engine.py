@@ -21,7 +21,10 @@ from cgamesh.batch.manifest import Manifest, normalised, tool_version
 from cgamesh.batch.summary import BatchSummary, InputRecord
 from cgamesh.errors import InvalidInputError
 
-SAVE_EVERY_SECONDS = 1.0  # the manifest is rewritten at most this often while tasks finish
+# While tasks finish the manifest is rewritten at most once a second, and less often when
+# rewriting it takes long (a manifest of many thousand inputs): never more than a tenth of the time.
+SAVE_EVERY_SECONDS = 1.0
+SAVE_SHARE = 0.1
 
 
 def run_batch(inputs: str | os.PathLike | Sequence[str | os.PathLike], outdir: str | os.PathLike, *, client=None,
@@ -49,6 +52,8 @@ def run_batch(inputs: str | os.PathLike | Sequence[str | os.PathLike], outdir: s
     check_options(options)
     options = normalised(options)
     start = time.perf_counter()
+    # Absolute paths: workers on other machines do not share this process's working folder.
+    outdir = Path(outdir).absolute()
     planned = plan_outputs(discover(inputs, listing, INPUT_EXTENSIONS), outdir, formats)
     Path(outdir).mkdir(parents=True, exist_ok=True)
     manifest = Manifest(outdir)
@@ -91,12 +96,11 @@ def _run_pending(pending: Sequence[Input], outdir, options: dict, version: str, 
         if progress and on_cluster and getattr(active, "dashboard_link", None):
             print(f"cgamesh: batch: dashboard {active.dashboard_link}", file=sys.stderr)
         worker_count = check_workers(active, version)
-        last_save = time.perf_counter()
+        last_save, save_cost = time.perf_counter(), 0.0
         try:
             for item, outcome in execute(active, pending, options, job, retries):
-                entry = {"input": str(item.path), "options": options, "tool": version,
-                         "outputs": [Path(o).relative_to(outdir).as_posix() if Path(o).is_relative_to(outdir)
-                                     else str(o) for o in item.outputs], **outcome}
+                entry = {"input": str(item.path.absolute()), "options": options, "tool": version,
+                         "outputs": [Path(o).relative_to(outdir).as_posix() for o in item.outputs], **outcome}
                 entry.pop("worker", None)
                 manifest.record(item.name, entry)
                 record = _record(item, outcome["status"], outcome)
@@ -106,7 +110,7 @@ def _run_pending(pending: Sequence[Input], outdir, options: dict, version: str, 
                     on_record(record)
                 if time.perf_counter() - last_save >= SAVE_EVERY_SECONDS:
                     manifest.save()
-                    last_save = time.perf_counter()
+                    last_save, save_cost = time.perf_counter(), 0.0
         finally:
             manifest.save()
     return worker_count
@@ -118,7 +122,7 @@ def execute(client, pending: Sequence[Input], options: dict, job: Callable = run
     from cgamesh.batch.cluster import distributed
 
     as_completed = distributed().as_completed
-    futures = {client.submit(job, str(item.path), [str(o) for o in item.outputs], options,
+    futures = {client.submit(job, str(item.path.absolute()), [str(o) for o in item.outputs], options,
                              pure=False, retries=retries, key=f"cgamesh-batch-{index}-{item.name}"): item
                for index, item in enumerate(pending)}
     for future in as_completed(futures):
@@ -145,8 +149,10 @@ def _task_failure(future) -> str:
 
 
 def _record(item: Input, status: str, outcome: dict) -> InputRecord:
+    # the task saw the absolute path; the user is shown the path as given
+    reason = outcome.get("reason", "").replace(str(item.path.absolute()), str(item.path))
     return InputRecord(
-        input=str(item.path), name=item.name, status=status, reason=outcome.get("reason", ""),
+        input=str(item.path), name=item.name, status=status, reason=reason,
         outputs=tuple(str(o) for o in item.outputs), sha256=outcome.get("sha256", ""),
         seconds=float(outcome.get("seconds", 0.0)), cpu_seconds=float(outcome.get("cpu_seconds", 0.0)), vertices=int(outcome.get("vertices", 0)),
         bytes=int(outcome.get("bytes", 0)))
