@@ -263,7 +263,7 @@ def test_the_command_line_exit_codes_and_json(dataset, tmp_path, capsys):
     assert str(bad) in captured.err and "invalid YAML" in captured.err
 
     for wrong in (["--format", "glb,xyz"], ["--tolerance", "0.1", "--around", "8"], ["--retries", "-1"],
-                  ["--around", "many"]):
+                  ["--around", "many"], ["--memory-limit", "lots"], ["--scheduler", "not-an-address"]):
         try:
             status = main(["batch", str(folder / good[0]), "-o", str(tmp_path / "out3"), *wrong])
         except SystemExit as exit_:  # argparse's own refusal

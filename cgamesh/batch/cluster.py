@@ -51,13 +51,22 @@ def open_client(client=None, *, scheduler: str | None = None, workers: int | Non
 
         try:  # Dask's connect timeout (distributed.comm.timeouts.connect, 30 s unless set)
             connected = dask_distributed.Client(address, timeout=dask.config.get("distributed.comm.timeouts.connect"))
-        except (OSError, TimeoutError) as error:
+        except (OSError, TimeoutError, ValueError) as error:  # ValueError: not an address
             raise InvalidInputError(f"cannot reach the Dask scheduler at {address}: {error}") from None
         with connected:
             yield connected, True
         return
     import dask
+    from dask.utils import parse_bytes
 
+    if isinstance(memory_limit, str) and memory_limit != "auto":
+        try:
+            parse_bytes(memory_limit)
+        except ValueError:
+            from cgamesh.errors import InvalidInputError
+
+            raise InvalidInputError(f"memory limit {memory_limit!r}: expected a size such as 2GB or 512MiB, "
+                                    "or auto") from None
     count = workers or os.cpu_count() or 1
     # A task whose worker dies is handed to another worker this many times before it is
     # reported as failed; and a worker holds only the task it runs (no queue of its own), so a
