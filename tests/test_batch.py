@@ -277,7 +277,9 @@ def test_the_command_runs_on_an_existing_scheduler(dataset, client, tmp_path, mo
     folder, good, _, reference = dataset
     address = client.scheduler.address
     assert main(["batch", str(folder / good[0]), "-o", str(tmp_path / "a"), "--scheduler", address, *CLI_OPTIONS]) == 0
-    assert "on 2 workers" in capsys.readouterr().out
+    captured = capsys.readouterr()
+    assert "on 2 workers" in captured.out
+    assert "cgamesh: batch: dashboard http" in captured.err  # on a cluster, its dashboard's link
     monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", address)  # Dask's own setting, as `dask worker` users have it
     assert main(["batch", str(folder / good[1]), "-o", str(tmp_path / "b"), *CLI_OPTIONS, "-q"]) == 0
     for out, name in ((tmp_path / "a", good[0]), (tmp_path / "b", good[1])):
