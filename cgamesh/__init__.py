@@ -2,8 +2,9 @@
 centrelines (neuron skeletons, tractograms, arrays).
 
 ``cgamesh.load(path, **options)`` and ``cgamesh.tubes(polylines, radii, parents, **options)``
-(cgamesh.api) return a ``Meshes``. Importing the package stays light: the API module is
-imported on first use.
+(cgamesh.api) return a ``Meshes``; ``cgamesh.batch(inputs, outdir, client=None, **options)``
+(cgamesh.batching) meshes whole datasets on Dask. Importing the package stays light: those
+modules (and Dask) are imported on first use.
 """
 
 from __future__ import annotations
@@ -12,11 +13,16 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from cgamesh.api import Meshes, load, tubes
+    from cgamesh.batching import batch
 
-__all__ = ["Meshes", "load", "tubes"]
+__all__ = ["Meshes", "batch", "load", "tubes"]
 
 
 def __getattr__(name: str):
+    if name == "batch":
+        from cgamesh.batching import batch
+
+        return batch
     if name in __all__:
         from cgamesh import api
 

@@ -26,15 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
                                       ".swc, .trk, .tck, .trx, .npz")
     parser.add_argument("-o", "--output", required=True, action="append",
                         help=f"output file, repeatable; its extension picks the format: {', '.join(WRITERS)}")
-    parser.add_argument("--around", type=whole_number(2), help="vertices around every circle, or across every ribbon (overrides the file)")
-    parser.add_argument("--along", type=whole_number(2), help="rings along every surface (overrides the file)")
-    parser.add_argument("--tolerance", type=positive_number,
-                        help="largest distance of every mesh from its true surface, in file units "
-                             "(instead of a resolution; overrides the file)")
-    parser.add_argument("--tangents", action="store_true",
-                        help="glTF: write a TANGENT attribute (so normal maps work)")
-    parser.add_argument("--quantize", action="store_true",
-                        help="glTF: store positions, normals and UVs in 16 / 8 bits (KHR_mesh_quantization)")
+    add_meshing_options(parser)
     parser.add_argument("--report", metavar="REPORT.json",
                         help="also write the mesh-quality report (JSON) of the meshes built")
     parser.add_argument("--strict", action="store_true",
@@ -43,6 +35,26 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     realdata.add_arguments(parser)
     return parser
+
+
+def add_meshing_options(parser: argparse.ArgumentParser) -> tuple[str, ...]:
+    """Add the options that shape each mesh to ``parser``; their names (argparse dests).
+
+    Shared with ``cgamesh batch``, which forwards them, as a plain dict, to every input.
+    """
+    group = parser.add_argument_group("meshing options")
+    actions = [
+        group.add_argument("--around", type=whole_number(2), help="vertices around every circle, or across every ribbon (overrides the file)"),
+        group.add_argument("--along", type=whole_number(2), help="rings along every surface (overrides the file)"),
+        group.add_argument("--tolerance", type=positive_number,
+                           help="largest distance of every mesh from its true surface, in file units "
+                                "(instead of a resolution; overrides the file)"),
+        group.add_argument("--tangents", action="store_true",
+                           help="glTF: write a TANGENT attribute (so normal maps work)"),
+        group.add_argument("--quantize", action="store_true",
+                           help="glTF: store positions, normals and UVs in 16 / 8 bits (KHR_mesh_quantization)"),
+    ]
+    return tuple(action.dest for action in actions)
 
 
 def run(args: argparse.Namespace) -> str:

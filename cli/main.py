@@ -6,6 +6,7 @@
     cgamesh view SCENE.yaml -o PAGE.html      a self-contained viewer page (cli/view.py)
     cgamesh render SCENE.yaml -o IMAGE.png    ray trace the analytic surfaces (cli/render.py)
     cgamesh verify SCENE.yaml MESH.glb        mesh against the ray tracer (cli/verify.py)
+    cgamesh batch INPUT... -o OUTDIR          many inputs on Dask, resumable (cli/batch.py)
 
 Thin by design: each command module parses its arguments and calls the package; this module
 dispatches, and turns any CgameshError into one line on stderr with exit status 2. No geometry
@@ -21,7 +22,8 @@ from cgamesh.errors import CgameshError
 
 EXIT_USER_ERROR = 2
 # subcommand name -> module of this package with build_parser() and run(args) -> str | None
-SUBCOMMANDS: dict[str, str] = {"check": "check", "view": "view", "render": "render", "verify": "verify"}
+SUBCOMMANDS: dict[str, str] = {"check": "check", "view": "view", "render": "render", "verify": "verify",
+                               "batch": "batch"}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -22,8 +22,8 @@ REAL_DATA_OPTIONS = ("radius", "min_radius", "units", "up", "subdivide", "color_
                      "keep_going")
 
 
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The options of centreline inputs, in a group of their own."""
+def add_arguments(parser: argparse.ArgumentParser) -> tuple[str, ...]:
+    """The options of centreline inputs, in a group of their own; their names (argparse dests)."""
     group = parser.add_argument_group("centreline inputs (.swc, .trk, .tck, .trx, .npz)")
     group.add_argument("--radius", type=positive_number, help="a constant tube radius (required where the file has none)")
     group.add_argument("--min-radius", type=positive_number, help="raise smaller radii (and radius 0) to this")
@@ -37,6 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="one closed 2-manifold surface (capped tubes, junctions and soma united)")
     group.add_argument("--keep-going", action="store_true",
                        help="skip segments that cannot be meshed, exit 3 (the default; --strict stops instead)")
+    return REAL_DATA_OPTIONS
 
 
 def is_real_data(path: str) -> bool:

@@ -12,7 +12,8 @@ import sys
 from pathlib import Path
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "kb_tube.yaml"
-NEVER_FOR_GLB = ("clifford", "numba", "cgamesh.tracer", "pxr", "trimesh", "xatlas", "pymeshlab", "matplotlib")
+NEVER_FOR_GLB = ("clifford", "numba", "cgamesh.tracer", "pxr", "trimesh", "xatlas", "pymeshlab", "matplotlib",
+                 "dask", "distributed", "cgamesh.batching")
 
 PROBE = """
 import json, sys
