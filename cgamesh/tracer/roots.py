@@ -50,9 +50,10 @@ Motor surfaces (docs/interpolation.md) have no interpolant C' whose blend is pol
 alpha, so no exact intersection polynomial. "polynomial" then samples (L v C)^2 on the
 MOTOR_PROXY_DEGREE + 1 circles at a segment's Chebyshev points and takes the real roots of
 the interpolating Chebyshev series (a proxy of the smooth function: colleague-matrix
-eigenvalues, as for blade surfaces); "sampled" is the sampled finder at N + 1 circles (two roots within one step are
-missed, as for blade surfaces). Either
-way each candidate gets MOTOR_NEWTON_STEPS Newton steps on the true function (dC/dt in closed
+eigenvalues, as for blade surfaces); "sampled" is the sampled finder at N + 1 circles,
+which, as for blade surfaces, misses two roots within one step (a ray in or near a circle's
+plane meets it twice: a double root the samples only touch), so ``verify`` on motor
+surfaces wants the default. Either way each candidate gets MOTOR_NEWTON_STEPS Newton steps on the true function (dC/dt in closed
 form) and is accepted like a polynomial root, by its residual.
 """
 
@@ -296,8 +297,8 @@ class SurfaceRoots:
         for start in range(0, len(coefficients), chunk):
             values = meet_values(coefficients[start:start + chunk], samples.matrix, self.grade)
             f = _square(values) if self.grade == 3 else values[..., 0]
-            which, t = sampled.sign_change_roots(f, samples.t)
-            found.append((start + which, t))
+            found.append(sampled.sign_change_roots(f, samples.t))
+            found[-1] = (start + found[-1][0], found[-1][1])
         which, t = (np.concatenate(parts) for parts in zip(*found))
         return which, t
 
