@@ -35,8 +35,8 @@ def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     R = (1 + b a) / |1 + b a|. For b = -a any half turn works; the axis is then a unit
     vector perpendicular to a, chosen deterministically.
     """
-    a = np.asarray(a, dtype=np.float64)
-    b = np.asarray(b, dtype=np.float64)
+    # broadcast first: a single a against many b (the first ring's e3 -> n) must index alike
+    a, b = np.broadcast_arrays(np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64))
     rotor = _scalar(np.ones(a.shape[:-1])) + products.geometric(vector(b), vector(a), (1,), (1,), (0, 2))
     norm = np.sqrt(rotor[..., 0] ** 2 + rotor[..., _E12] ** 2 + rotor[..., _E13] ** 2 + rotor[..., _E23] ** 2)
     opposite = norm < 1e-8
