@@ -1,4 +1,4 @@
-"""Similarity motions through control circles: the splined centre, normal and log-radius of motor surfaces.
+"""Similarity motions through control circles: the splined centre, normal and radius of motor surfaces.
 
 A circle is fixed by its centre c, its unit normal n and its radius r; the similarity
 (TRS versor, paper section 11) Z = T(c) D(r) R with R e3 ~R = n carries the unit circle of the
@@ -7,8 +7,9 @@ by the motion Z(t) = T(c(t)) D(r(t)) R(t), whose three parts are splined separat
 same parameter (docs/interpolation.md):
 
 - the centre c(t): the curve kind's Euclidean spline of the control centres;
-- the log-radius rho(t) = ln r(t): the same spline of ln r_i, its node slopes limited
-  (Fritsch-Carlson) so the radius never leaves the range of the two radii of its span;
+- the radius r(t): the same spline of the radii, its node slopes limited (Fritsch-Carlson) so
+  the radius never leaves the range of the two radii of its span (linear on a linear span: the
+  frustum of a skeleton's segment, as SWC files mean it);
 - the normal n(t) = H(t) / |H(t)|, H the same spline of the control normals (a normalised
   vector spline: on a span it moves along the great circle joining its ends for `linear`),
   with a bump towards the direction of travel on spans whose end normals are more than a
@@ -20,7 +21,7 @@ Splines with knots (linear, kb, catmull_rom) place node i at t = i but take thei
 per unit of "circle distance" (chord-length parametrisation): the span from circle i to
 i + 1 has length Delta_i = |c_{i+1} - c_i| + |r_{i+1} - r_i| + (r_i + r_{i+1}) / 2 * angle(n_i, n_{i+1}),
 the furthest a point of the circle moves, at most. Every component uses the same knots and
-the same basis, so on both sides of a node the derivatives of (c, n, rho) are one vector
+the same basis, so on both sides of a node the derivatives of (c, n, r) are one vector
 scaled by Delta_{i-1} or Delta_i: the point velocity fields are parallel there and the
 surface is tangent-continuous (C1 of its tangent planes) wherever the curve kind is C1.
 """
@@ -158,7 +159,7 @@ def _monotone(slopes: np.ndarray, values: np.ndarray, spans: np.ndarray, closed:
 class MotionSpline:
     """The splined similarity parameters of a motor surface, in its local frame.
 
-    nodes (n, 7): centre, oriented unit normal, ln radius of each control. ``kind`` is the
+    nodes (n, 7): centre, oriented unit normal, radius of each control. ``kind`` is the
     scene's curve kind. Piecewise kinds: spans (S,), slopes_out / slopes_in (n, 7) per unit
     knot, bumps (S, 3) the direction (times weight) the normal is pushed to mid-span.
     Global kinds (Bezier): ``weights`` of the rational form (ones for a plain Bezier).
@@ -184,7 +185,7 @@ class MotionSpline:
         radius = np.asarray(radius, dtype=np.float64)
         if align:
             normal = orient_normals(centre, normal, radius, closed)
-        nodes = np.hstack([centre, normal, np.log(radius)[:, None]])
+        nodes = np.hstack([centre, normal, radius[:, None]])
         if kind in GLOBAL_KINDS:
             return cls(kind, False, nodes, weights=tuple(weights) if weights is not None else (1.0,) * len(nodes))
         spans = span_lengths(centre, normal, radius, closed)
@@ -236,8 +237,7 @@ class MotionSpline:
         length = np.linalg.norm(h, axis=1)
         normal = h / length[:, None]
         d_normal = (dh - normal * np.einsum("ai,ai->a", normal, dh)[:, None]) / length[:, None]
-        radius = np.exp(value[:, 6])
-        return MotionState(value[:, :3], normal, radius, rate[:, :3], d_normal, radius * rate[:, 6], length)
+        return MotionState(value[:, :3], normal, value[:, 6], rate[:, :3], d_normal, rate[:, 6], length)
 
     def check_normals(self, name: str, samples_per_segment: int) -> None:
         """Raise where the normal spline comes near zero (the plane's direction is lost there)."""
