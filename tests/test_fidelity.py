@@ -88,6 +88,6 @@ def test_the_measure_sees_a_tube_too_wide_and_too_narrow():
             return tube
         result = fidelity.measure([chain], build, "natural")
         # the centreline is sampled every 0.2 radii: a vertex between two samples is measured up
-        # to sqrt(d^2 + 0.1^2) from it (0.4% at d = 1.3)
-        assert result.bulge_max == pytest.approx(factor, rel=1e-2)
+        # to sqrt(d^2 + 0.1^2) from the nearer one
+        assert factor - 1e-9 <= result.bulge_max <= np.hypot(factor, 0.1) + 1e-9
         assert result.neck_min == pytest.approx(factor, rel=3e-2)  # rings 1.25 radii apart
