@@ -19,6 +19,7 @@ a velocity that keeps points on C(t), as for blade surfaces.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -66,8 +67,8 @@ class MotorSurface:
     name: str
     path: MotionSpline
     frame: LocalFrame
-    grade: int = CIRCLE_GRADE
-    interpolation: str = "motor"
+    grade: ClassVar[int] = CIRCLE_GRADE
+    interpolation: ClassVar[str] = "motor"
 
     @property
     def segment_count(self) -> int:

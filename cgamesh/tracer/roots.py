@@ -176,7 +176,7 @@ class SurfaceRoots:
     def __init__(self, surface: EvolvedSurface):
         self.surface = surface
         self.grade = surface.grade
-        self.motor = getattr(surface, "interpolation", "blade") == "motor"
+        self.motor = surface.interpolation == "motor"
         self.degree = None if self.motor else interpolant_degree(surface.curve)
         self._polynomials: dict[int, _Polynomial] = {}
         self._known: dict[int, np.ndarray] = {}
