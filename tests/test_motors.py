@@ -461,3 +461,25 @@ def test_a_first_circle_facing_exactly_down_meshes(interpolation):
                       interpolation=interpolation)
     mesh = mesh_surface(spec, Resolution(around=8, along=4))
     assert np.all(np.isfinite(mesh.positions)) and np.all(np.isfinite(mesh.normals))
+
+
+@PROPERTIES
+@given(log_scale=st.floats(-4.0, 4.0), distance=st.floats(0.0, 1e5), curve=st.sampled_from(KINDS),
+       seed=st.integers(0, 2**32 - 1))
+def test_any_size_anywhere(log_scale, distance, curve, seed):
+    """Radii from 1e-4 to 1e4, centres up to 1e5 from the origin: vertices on the motion's circles
+    within 1e-9 of the size (or the spacing of float64 numbers at the coordinates), unit normals."""
+    rng = np.random.default_rng(seed)
+    scale = 10.0**log_scale
+    centres, normals, radii = bent_tube(rng, 4, spacing=3.0)
+    offset = distance * rng.normal(size=3) / math.sqrt(3.0)
+    surface = build_surface(motor_spec(scale * centres + offset, normals, scale * radii, curve=curve))
+    along, around = 16, 8
+    mesh = mesh_circle_surface(surface, around, along)
+    assert np.all(np.isfinite(mesh.positions)) and np.all(np.isfinite(mesh.normals))
+    np.testing.assert_allclose(np.linalg.norm(mesh.normals, axis=1), 1.0, atol=1e-12)
+    state = surface.circles(np.linspace(0.0, surface.segment_count, along))
+    grid = mesh.positions.reshape(along, around + 1, 3)
+    representable = 4.0 * np.finfo(float).eps * np.abs(grid).max()
+    distance_off = circle_distance(grid, state.centre, state.normal, state.radius).max()
+    assert distance_off <= 1e-9 * surface.frame.scale + representable
