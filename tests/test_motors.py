@@ -483,3 +483,16 @@ def test_any_size_anywhere(log_scale, distance, curve, seed):
     representable = 4.0 * np.finfo(float).eps * np.abs(grid).max()
     distance_off = circle_distance(grid, state.centre, state.normal, state.radius).max()
     assert distance_off <= 1e-9 * surface.frame.scale + representable
+
+
+def test_the_tracer_traces_motor_surfaces_without_the_mesher():
+    """The tracer is the mesher's independent referee: rendering a motor scene imports no meshing."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from cgamesh.inputs.scene import load_scene; from cgamesh.tracer.world import build_world; "
+            "from cgamesh.tracer.render import render; "
+            f"world = build_world(load_scene({str(EXAMPLE)!r})); render(world, 16, 12); "
+            "print(sorted(m for m in sys.modules if m.startswith('cgamesh.meshing')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
