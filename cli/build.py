@@ -10,7 +10,7 @@ from pathlib import Path
 
 from cgamesh.errors import InvalidInputError
 from cgamesh.export.registry import WRITERS, writer_for
-from cgamesh_cli.arguments import positive_number, whole_number
+from cgamesh_cli.arguments import add_budget_option, positive_number, whole_number
 
 EXIT_QUALITY = 1  # --strict and a quality threshold broken
 
@@ -37,6 +37,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="also write the mesh-quality report (JSON) of the meshes built")
     parser.add_argument("--strict", action="store_true",
                         help="with --report: exit 1 when a quality threshold is broken")
+    add_budget_option(parser)
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     return parser
 
@@ -64,7 +65,7 @@ def run(args: argparse.Namespace) -> str:
     scene = load_scene(args.scene)
     with Progress(len(scene.surfaces), enabled=not args.quiet) as progress:
         meshes = mesh_scene(scene, Resolution(args.around, args.along, args.tolerance), progress=progress.advance,
-                            tangents=args.tangents)
+                            tangents=args.tangents, max_memory=args.max_memory, outputs=args.output)
     written = [write(output, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit, source_units=scene.units,
                      tangents=args.tangents, quantize=args.quantize) for output in outputs]
     seconds = time.perf_counter() - start
