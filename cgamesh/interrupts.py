@@ -29,7 +29,12 @@ def _raise(signal_number, frame):
     raise Interrupted(signal_number)
 
 
-def install() -> None:
-    """Raise Interrupted on SIGINT and SIGTERM (call from the main thread)."""
-    signal.signal(signal.SIGINT, _raise)
-    signal.signal(signal.SIGTERM, _raise)
+def install() -> dict:
+    """Raise Interrupted on SIGINT and SIGTERM (call from the main thread); returns the previous
+    handlers, for ``restore``."""
+    return {number: signal.signal(number, _raise) for number in (signal.SIGINT, signal.SIGTERM)}
+
+
+def restore(previous: dict) -> None:
+    for number, handler in previous.items():
+        signal.signal(number, handler)

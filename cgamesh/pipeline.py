@@ -51,7 +51,7 @@ def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
     """
     plan = plan_surface(spec, resolution, tangents)
     costs.Budget.of(max_memory).require(plan.peak, plan.where, plan.what)
-    return _mesh_planned(plan, tangents)
+    return mesh_planned(plan, tangents)
 
 
 @dataclass(frozen=True)
@@ -105,7 +105,8 @@ def plan_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
                        f"meshing to tolerance (about {cost.around + 1} x {cost.along} vertices)")
 
 
-def _mesh_planned(plan: SurfacePlan, tangents: bool) -> SurfaceMesh:
+def mesh_planned(plan: SurfacePlan, tangents: bool) -> SurfaceMesh:
+    """Mesh a surface as ``plan_surface`` planned it (the budget already checked)."""
     spec, surface, tolerance, around, along = plan.spec, plan.surface, plan.tolerance, plan.around, plan.along
     try:
         if spec.type == "point_pairs":  # caps are circles only (the scene loader refuses them here)
@@ -159,7 +160,7 @@ def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lam
                    f"about {vertices} vertices)")
     meshes = []
     for plan in plans:
-        meshes.append(_mesh_planned(plan, tangents))
+        meshes.append(mesh_planned(plan, tangents))
         progress(plan.spec.name)
     meshes = uv_map.apply_uv_modes(meshes, [(spec.uv, spec.uv_scale) for spec in scene.surfaces])
     return [(mesh, spec.material) for mesh, spec in zip(meshes, scene.surfaces)]

@@ -27,7 +27,7 @@ SUBCOMMANDS: dict[str, str] = {"check": "check", "view": "view", "render": "rend
 def main(argv: list[str] | None = None) -> int:
     from cgamesh import interrupts
 
-    interrupts.install()
+    previous = interrupts.install()
     try:
         return _main(argv)
     except (interrupts.Interrupted, KeyboardInterrupt) as stop:
@@ -36,6 +36,8 @@ def main(argv: list[str] | None = None) -> int:
         remove_live_temporaries()
         print("cgamesh: interrupted", file=sys.stderr)
         return getattr(stop, "exit_status", 130)
+    finally:
+        interrupts.restore(previous)
 
 
 def _main(argv: list[str] | None) -> int:
