@@ -43,7 +43,8 @@ ALONG_SAFETY = 2.0
 # size, per vertex of this module's estimate: circles up to about 3.5 KB, ribbons up to about
 # 200 KB (their ring choice takes up to 5 times the estimated vertices), with a margin.
 TOLERANCE_PER_VERTEX = {"circles": 8 * 2**10, "point_pairs": 256 * 2**10}
-CANDIDATE_COPIES = 4  # the candidate grid and the ring choice's temporaries of its size
+CANDIDATE_COPIES = 16  # the candidate grid and the ring choice's temporaries of its size
+RUN_OVERHEAD = 8 * 2**20  # per run, whatever its size: the dense scans, the measure's tables
 
 
 @dataclass(frozen=True)
@@ -97,7 +98,7 @@ def estimate(surface: EvolvedSurface, tolerance: float, closed: bool = False) ->
             break
         per_segment *= 4
     candidates = (per_segment * segments + 1) * (around + 2) * 3 * 8 * CANDIDATE_COPIES
-    return ToleranceCost(around, along, TOLERANCE_PER_VERTEX[kind] * vertices + candidates)
+    return ToleranceCost(around, along, TOLERANCE_PER_VERTEX[kind] * vertices + candidates + RUN_OVERHEAD)
 
 
 def _rings(t: np.ndarray, grid: np.ndarray, budget: float, column_ratio: float, segments: int) -> int:
