@@ -222,6 +222,7 @@ def _peak(work) -> int:
         tracemalloc.stop()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("example, around, along", [("kb_tube", 64, 256), ("kb_tube", 4, 4000),
                                                     ("traced_fig11_point_pairs", 16, 512),
                                                     ("traced_fig11_point_pairs", 2, 2048)])
@@ -246,6 +247,7 @@ def test_the_mesh_estimate_covers_meshing_and_writing(tmp_path, example, around,
     assert measured <= estimate, (measured, estimate)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("example, relative", [("kb_tube", 1e-2), ("fig10_cubic_pairs", 1e-2)])
 def test_the_tolerance_estimate_covers_the_run(example, relative):
     scene = load_scene(EXAMPLES / f"{example}.yaml")
