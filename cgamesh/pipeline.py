@@ -97,6 +97,7 @@ def plan_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
             f"{where}: a tolerance must be at least {floor:.3g} for this surface (1e-07 of its bounding "
             f"radius {surface.frame.scale:.3g}, and above float64 rounding at its coordinates), got {tolerance:g}")
     try:
+        surface.check_projection_exists()  # before sampling it: a vanishing projection is its own error
         cost = tolerance_estimate(surface, tolerance, closed=spec.closed)
     except CgameshError as error:
         raise type(error)(f"{spec.location}: {error}") from None
