@@ -26,7 +26,7 @@ from cgamesh.meshing.ribbons import mesh_ribbon_surface
 from cgamesh.inputs.scene import Scene, SurfaceSpec
 from cgamesh.meshing.tessellation import mesh_to_tolerance, ribbon_to_tolerance
 from cgamesh.meshing.tolerance_budget import estimate as tolerance_estimate
-from cgamesh.meshing.tolerance_budget import tolerance_floor
+from cgamesh.meshing.tolerance_budget import TOLERANCE_FLOOR, tolerance_floor
 
 
 @dataclass(frozen=True)
@@ -94,7 +94,7 @@ def plan_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
     floor = tolerance_floor(surface)
     if not tolerance >= floor:
         raise InvalidInputError(
-            f"{where}: a tolerance must be at least {floor:.3g} for this surface (1e-07 of its bounding "
+            f"{where}: a tolerance must be at least {floor:.3g} for this surface ({TOLERANCE_FLOOR:g} of its bounding "
             f"radius {surface.frame.scale:.3g}, and above float64 rounding at its coordinates), got {tolerance:g}")
     try:
         surface.check_projection_exists()  # before sampling it: a vanishing projection is its own error
