@@ -2,12 +2,19 @@
 
 Geometry errors found on the way (a projection that vanishes, a degenerate control) are
 re-raised with the surface's place in the scene file in front of them.
+
+Every surface is priced before any is meshed (cgamesh.budget): a fixed resolution by its
+vertex count, a tolerance by the a priori estimate of cgamesh.meshing.tolerance_budget (after
+checking it against its floor), the outputs by their formats; a scene that asks for more than
+``max_memory`` is refused in one line naming the surface and the knob.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
+from cgamesh import budget as costs
 
 from cgamesh.meshing import uv as uv_map
 from cgamesh.geometry.construction import build_surface, make_curve  # noqa: F401 (part of this module's API)
@@ -18,6 +25,8 @@ from cgamesh.meshing.circles import mesh_circle_surface
 from cgamesh.meshing.ribbons import mesh_ribbon_surface
 from cgamesh.inputs.scene import Scene, SurfaceSpec
 from cgamesh.meshing.tessellation import mesh_to_tolerance, ribbon_to_tolerance
+from cgamesh.meshing.tolerance_budget import estimate as tolerance_estimate
+from cgamesh.meshing.tolerance_budget import TOLERANCE_FLOOR, tolerance_floor
 
 
 @dataclass(frozen=True)
@@ -29,21 +38,77 @@ class Resolution:
     tolerance: float | None = None
 
 
-def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tangents: bool = False) -> SurfaceMesh:
+def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tangents: bool = False,
+                 max_memory=None) -> SurfaceMesh:
     """The mesh of one surface, in the scene file's frame and units.
 
     A tolerance (from the command line, or the file's unless the command line gives a full
     resolution) asks for the fewest vertices within that distance of the true surface; the
     mesh's ``max_deviation`` then holds the measured distance. ``tangents``: the circle mesher's
-    analytic tangents are wanted (an output writes TANGENT).
+    analytic tangents are wanted (an output writes TANGENT). ``max_memory``: the budget (bytes,
+    a size such as "2G", a cgamesh.budget.Budget, or None for the default); a surface that
+    needs more is refused with ResourceLimitError before anything is allocated.
     """
+    plan = plan_surface(spec, resolution, tangents)
+    costs.Budget.of(max_memory).require(plan.peak, plan.where, plan.what)
+    return mesh_planned(plan, tangents)
+
+
+@dataclass(frozen=True)
+class SurfacePlan:
+    """A surface about to be meshed and its price: ``held`` bytes its mesh keeps, ``peak`` the
+    most meshing it allocates, ``vertices`` (estimated for a tolerance); ``where`` and ``what``
+    name it in a refusal."""
+
+    spec: SurfaceSpec
+    surface: object
+    around: int | None
+    along: int | None
+    tolerance: float | None
+    vertices: int
+    held: int
+    peak: int
+    where: str
+    what: str
+
+
+def plan_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tangents: bool = False) -> SurfacePlan:
+    """Check and price one surface's request (see the module doc); builds its evolved surface."""
     tolerance = _tolerance(spec, resolution)
+    overridden = resolution.around is not None or resolution.along is not None
     if tolerance is None:
         around = resolution.around or spec.around
         along = resolution.along or spec.along
         if spec.type == "circles" and around < 3:
-            raise InvalidInputError(f"{spec.location}: a circle needs at least 3 vertices around, got {around}")
+            where = f"--around {around}" if resolution.around else f"{spec.location}.resolution.around"
+            raise InvalidInputError(f"{where}: a circle needs at least 3 vertices around, got {around}")
+        held, peak = costs.surface_bytes(spec.type, around, along, spec.caps, tangents)
+        where = (f"{spec.location} with --around {around} --along {along}" if overridden
+                 else f"{spec.location}.resolution")
+        return SurfacePlan(spec, build_surface(spec), around, along, None,
+                           costs.grid_vertices(spec.type, around, along, spec.caps), held, peak,
+                           where, f"mesh ({around} x {along})")
     surface = build_surface(spec)
+    where = (f"{spec.location} with --tolerance {tolerance:g}" if resolution.tolerance is not None
+             else f"{spec.location}.tolerance")
+    floor = tolerance_floor(surface)
+    if not tolerance >= floor:
+        raise InvalidInputError(
+            f"{where}: a tolerance must be at least {floor:.3g} for this surface ({TOLERANCE_FLOOR:g} of its bounding "
+            f"radius {surface.frame.scale:.3g}, and above float64 rounding at its coordinates), got {tolerance:g}")
+    try:
+        surface.check_projection_exists()  # before sampling it: a vanishing projection is its own error
+        cost = tolerance_estimate(surface, tolerance, closed=spec.closed)
+    except CgameshError as error:
+        raise type(error)(f"{spec.location}: {error}") from None
+    held = costs.HELD_PER_VERTEX * cost.vertices
+    return SurfacePlan(spec, surface, None, None, tolerance, cost.vertices, held, max(cost.bytes, held), where,
+                       f"meshing to tolerance (about {cost.around + 1} x {cost.along} vertices)")
+
+
+def mesh_planned(plan: SurfacePlan, tangents: bool) -> SurfaceMesh:
+    """Mesh a surface as ``plan_surface`` planned it (the budget already checked)."""
+    spec, surface, tolerance, around, along = plan.spec, plan.surface, plan.tolerance, plan.around, plan.along
     try:
         if spec.type == "point_pairs":  # caps are circles only (the scene loader refuses them here)
             if tolerance is not None:
@@ -74,15 +139,29 @@ def _tolerance(spec: SurfaceSpec, resolution: Resolution) -> float | None:
 
 
 def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lambda label: None,
-               tangents: bool = False) -> list[tuple[SurfaceMesh, Material]]:
+               tangents: bool = False, max_memory=None,
+               outputs: Sequence[str] = ()) -> list[tuple[SurfaceMesh, Material]]:
     """Every surface's mesh with its material, in file order; ``progress(name)`` after each.
 
     The UVs are those of each surface's ``uv`` mode (uv.py: natural, none, or one xatlas atlas
-    shared by every surface that asks for it).
+    shared by every surface that asks for it). Before any surface is meshed the whole request
+    is priced against ``max_memory`` (see ``mesh_surface``): every mesh kept, the largest
+    meshing peak, and the largest export of ``outputs`` (their file names or extensions,
+    written one after another); ResourceLimitError when it exceeds it.
     """
+    budget = costs.Budget.of(max_memory)
+    plans = [plan_surface(spec, resolution, tangents) for spec in scene.surfaces]
+    for plan in plans:
+        budget.require(plan.peak, plan.where, plan.what)
+    held = sum(plan.held for plan in plans)
+    vertices = sum(plan.vertices for plan in plans)
+    suffixes = [("." + str(o).rsplit(".", 1)[-1]) if "." in str(o) else str(o) for o in outputs]
+    transient = max([plan.peak - plan.held for plan in plans] + [costs.export_bytes(suffixes, vertices, tangents)])
+    budget.require(held + transient, f"{scene.path}", f"meshes and exports ({len(plans)} surfaces, "
+                   f"about {vertices} vertices)")
     meshes = []
-    for spec in scene.surfaces:
-        meshes.append(mesh_surface(spec, resolution, tangents))
-        progress(spec.name)
+    for plan in plans:
+        meshes.append(mesh_planned(plan, tangents))
+        progress(plan.spec.name)
     meshes = uv_map.apply_uv_modes(meshes, [(spec.uv, spec.uv_scale) for spec in scene.surfaces])
     return [(mesh, spec.material) for mesh, spec in zip(meshes, scene.surfaces)]

@@ -11,7 +11,7 @@ from pathlib import Path
 from cgamesh.errors import InvalidInputError
 from cgamesh.export.registry import WRITERS, writer_for
 from cgamesh_cli import realdata
-from cgamesh_cli.arguments import positive_number, whole_number
+from cgamesh_cli.arguments import add_budget_option, positive_number, whole_number
 
 EXIT_QUALITY = 1  # --strict and a quality threshold broken
 
@@ -32,6 +32,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--strict", action="store_true",
                         help="with --report: exit 1 when a quality threshold is broken; centreline inputs: "
                              "a segment that cannot be meshed stops the run (exit 2, nothing written)")
+    add_budget_option(parser)
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     realdata.add_arguments(parser)
     return parser
@@ -60,7 +61,8 @@ def add_meshing_options(parser: argparse.ArgumentParser) -> tuple[str, ...]:
 def run(args: argparse.Namespace) -> str:
     """Build and write every output; returns the summary lines (one per output), or the exit
     status 1 after printing them when --strict finds a quality threshold broken."""
-    from cgamesh.export.registry import write
+    from cgamesh.export.atomic import all_or_nothing
+    from cgamesh.export.registry import check_distinct, vertices_written, write
     from cgamesh.pipeline import Resolution, mesh_scene
     from cgamesh.progress import Progress
     from cgamesh.inputs.scene import load_scene
@@ -79,22 +81,25 @@ def run(args: argparse.Namespace) -> str:
         raise InvalidInputError("--strict needs --report REPORT.json")
     if args.tolerance is not None and (args.around is not None or args.along is not None):
         raise InvalidInputError("--tolerance cannot be combined with --around or --along")
+    check_distinct(outputs, args.report, args.scene)
     start = time.perf_counter()
     scene = load_scene(args.scene)
     with Progress(len(scene.surfaces), enabled=not args.quiet) as progress:
         meshes = mesh_scene(scene, Resolution(args.around, args.along, args.tolerance), progress=progress.advance,
-                            tangents=args.tangents)
-    written = [write(output, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit, source_units=scene.units,
-                     tangents=args.tangents, quantize=args.quantize) for output in outputs]
+                            tangents=args.tangents, max_memory=args.max_memory, outputs=args.output)
+    with all_or_nothing():  # every output, sidecar and the report, or none of them
+        written = [write(output, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit, source_units=scene.units,
+                         tangents=args.tangents, quantize=args.quantize) for output in outputs]
+        failures = _write_report(args.report, [mesh for mesh, _ in meshes], args.scene) if args.report else []
     seconds = time.perf_counter() - start
-    failures = _write_report(args.report, [mesh for mesh, _ in meshes], args.scene) if args.report else []
-    vertices = sum(mesh.vertex_count for mesh, _ in meshes)
     triangles = sum(mesh.triangle_count for mesh, _ in meshes)
     deviations = [mesh.max_deviation for mesh, _ in meshes if mesh.max_deviation is not None]
     deviation = f", max deviation {max(deviations):.3g}" if deviations else ""
+    held = [vertices_written(output, meshes) for output in outputs]  # what each file holds (USD welds)
     summary = "\n".join(
-        f"{output}: {len(meshes)} surface{'s' if len(meshes) != 1 else ''}, {vertices} vertices, "
-        f"{triangles} triangles{deviation}, {seconds:.2f} s, {size} bytes" for output, size in zip(outputs, written))
+        f"{output}: {len(meshes)} surface{'s' if len(meshes) != 1 else ''}, {count} {word}, "
+        f"{triangles} triangles{deviation}, {seconds:.2f} s, {size} bytes"
+        for output, size, (count, word) in zip(outputs, written, held))
     if args.strict and failures:
         if not args.quiet:
             print(summary)

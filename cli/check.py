@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from cgamesh_cli.arguments import whole_number
+from cgamesh_cli.arguments import add_budget_option, whole_number
 
 EXIT_QUALITY = 1  # --strict and a threshold broken
 
@@ -26,6 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--max-uv-flips", type=int, help="also refuse more triangles with flipped UVs")
     parser.add_argument("--max-normal-deviation", type=float,
                         help="also refuse normals further from their faces' (degrees)")
+    add_budget_option(parser)
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing (the exit status tells)")
     return parser
 
@@ -39,7 +40,8 @@ def run(args: argparse.Namespace):
         from cgamesh.pipeline import Resolution, mesh_scene
         from cgamesh.inputs.scene import load_scene
 
-        meshes = [mesh for mesh, _ in mesh_scene(load_scene(path), Resolution(args.around, args.along))]
+        meshes = [mesh for mesh, _ in mesh_scene(load_scene(path), Resolution(args.around, args.along),
+                                                  max_memory=args.max_memory)]
     else:
         meshes = load_meshes(path)
     limits = Thresholds(max_aspect_ratio=args.max_aspect, min_angle_degrees=args.min_angle,

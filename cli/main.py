@@ -27,6 +27,22 @@ SUBCOMMANDS: dict[str, str] = {"check": "check", "view": "view", "render": "rend
 
 
 def main(argv: list[str] | None = None) -> int:
+    from cgamesh import interrupts
+
+    previous = interrupts.install()
+    try:
+        return _main(argv)
+    except (interrupts.Interrupted, KeyboardInterrupt) as stop:
+        from cgamesh.export.atomic import remove_live_temporaries
+
+        remove_live_temporaries()
+        print("cgamesh: interrupted", file=sys.stderr)
+        return getattr(stop, "exit_status", 130)
+    finally:
+        interrupts.restore(previous)
+
+
+def _main(argv: list[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     name = argv[0] if argv and argv[0] in SUBCOMMANDS else None
     module = importlib.import_module(f"cgamesh_cli.{SUBCOMMANDS[name]}" if name else "cgamesh_cli.build")

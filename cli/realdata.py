@@ -76,6 +76,11 @@ def run(args: argparse.Namespace) -> str | int:
         raise InvalidInputError("--tolerance cannot be combined with --around or --subdivide")
     if args.watertight and args.split:
         raise InvalidInputError("--watertight makes one surface; it cannot be combined with --split")
+    from cgamesh.budget import Budget, centerline_bytes
+    from cgamesh.export.atomic import all_or_nothing
+    from cgamesh.export.registry import check_distinct
+
+    check_distinct(outputs, args.report, args.scene)
     start = time.perf_counter()
     lines = read_centerlines(args.scene, units=args.units)
     options = TubeOptions(radius=args.radius, min_radius=args.min_radius, up=args.up or "z",
@@ -83,16 +88,23 @@ def run(args: argparse.Namespace) -> str | int:
                           subdivide=3 if args.subdivide is None else args.subdivide, tolerance=args.tolerance,
                           color_by=args.color_by or "none", split=args.split, watertight=args.watertight,
                           strict=args.strict)
-    with Progress(chain_count(lines), enabled=not args.quiet) as progress:
+    chains = chain_count(lines)
+    if options.tolerance is None:  # the tolerance's own plan prices a tolerance run
+        vertices, peak = centerline_bytes(len(lines.points), chains, options.around, options.subdivide,
+                                          [o.suffix for o in outputs], tangents=args.tangents)
+        Budget.of(args.max_memory).require(peak, args.scene, f"memory for {vertices} vertices of tubes")
+    with Progress(chains, enabled=not args.quiet) as progress:
         built = mesh_centerlines(lines, options, progress=progress.advance)
     surfaces = [(mesh, built.material) for mesh in built.meshes]
-    written = [write(output, surfaces, up=built.up, meters_per_unit=built.meters_per_unit, source_units=built.units,
-                     tangents=args.tangents, quantize=args.quantize) for output in outputs]
     failures = []
-    if args.report:
-        from cgamesh_cli.build import _write_report
+    with all_or_nothing():  # every output, sidecar and the report, or none of them
+        written = [write(output, surfaces, up=built.up, meters_per_unit=built.meters_per_unit,
+                         source_units=built.units, tangents=args.tangents, quantize=args.quantize)
+                   for output in outputs]
+        if args.report:
+            from cgamesh_cli.build import _write_report
 
-        failures = _write_report(args.report, list(built.meshes), args.scene)
+            failures = _write_report(args.report, list(built.meshes), args.scene)
     seconds = time.perf_counter() - start
     vertices = sum(m.vertex_count for m in built.meshes)
     triangles = sum(m.triangle_count for m in built.meshes)

@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 from cgamesh.errors import InvalidInputError
-from cgamesh_cli.arguments import whole_number
+from cgamesh_cli.arguments import add_budget_option, whole_number
 
 MAX_SIDE = 16384
 
@@ -40,6 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-o", "--output", required=True, help="output image: .png")
     parser.add_argument("--size", type=image_size, default=(640, 480), help="WIDTHxHEIGHT (default 640x480)")
     add_tracer_options(parser)
+    add_budget_option(parser)
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     return parser
 
@@ -48,8 +49,7 @@ def run(args: argparse.Namespace) -> str:
     from cgamesh.progress import Progress
     from cgamesh.inputs.scene import load_scene
     from cgamesh.tracer.evolved import RootFinder
-    from cgamesh.tracer.png import write_png
-    from cgamesh.tracer.render import band_count, render
+    from cgamesh.tracer.render import band_count, render_png
     from cgamesh.tracer.world import build_world
 
     output = Path(args.output)
@@ -58,8 +58,7 @@ def run(args: argparse.Namespace) -> str:
     start = time.perf_counter()
     world = build_world(load_scene(args.scene), RootFinder(args.root_finder, args.samples))
     width, height = args.size
-    with Progress(band_count(width, height), enabled=not args.quiet) as progress:
-        image = render(world, width, height, progress.advance)
-    written = write_png(output, image)
+    with Progress(band_count(width, height, world, args.max_memory), enabled=not args.quiet) as progress:
+        written = render_png(world, width, height, output, progress.advance, args.max_memory)
     seconds = time.perf_counter() - start
     return f"{output}: {width}x{height}, {width * height} primary rays, {seconds:.2f} s, {written} bytes"

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from cgamesh_cli.arguments import add_budget_option
 from cgamesh_cli.render import add_tracer_options, image_size
 
 EXIT_FAILED = 1
@@ -43,6 +44,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--max-missed", type=_non_negative, default=v.MAX_MISSED,
                         help=f"largest fraction of vertex rays that hit nothing (default {v.MAX_MISSED:g})")
     add_tracer_options(parser)
+    add_budget_option(parser)
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing (the exit status tells)")
     return parser
 
@@ -69,12 +71,13 @@ def run(args: argparse.Namespace) -> int:
     world = build_world(scene, RootFinder(args.root_finder, args.samples), primitives=False)
     thresholds = v.Thresholds(args.max_angle, args.max_distance, args.max_missed)
     with Progress(len(world.surfaces()), enabled=not args.quiet) as progress:
-        reports = v.verify_meshes(world.surfaces(), meshes, thresholds, progress.advance)
+        reports = v.verify_meshes(world.surfaces(), meshes, thresholds, progress.advance, args.max_memory)
     if args.image:
         width, height = args.size
         plain = replace(world, shadows=False, max_depth=0)
         names = [s.name for s in world.surfaces()]
-        write_png(args.image, v.comparison_image(plain, [m for m in meshes if m.name in names], width, height))
+        write_png(args.image, v.comparison_image(plain, [m for m in meshes if m.name in names], width, height,
+                                                 args.max_memory))
     if not args.quiet:
         print(v.format_reports(reports, thresholds), file=sys.stdout)
     return 0 if all(r.passed for r in reports) else EXIT_FAILED

@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 from cgamesh.errors import InvalidInputError
-from cgamesh_cli.arguments import whole_number
+from cgamesh_cli.arguments import add_budget_option, whole_number
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -20,6 +20,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-o", "--output", required=True, help="the page to write (.html)")
     parser.add_argument("--around", type=whole_number(2), help="vertices around every circle, or across every ribbon (overrides the file)")
     parser.add_argument("--along", type=whole_number(2), help="rings along every surface (overrides the file)")
+    add_budget_option(parser)
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     return parser
 
@@ -35,6 +36,6 @@ def run(args: argparse.Namespace) -> str:
                                 "expected .html")
     start = time.perf_counter()
     scene = load_scene(args.scene)
-    meshes = mesh_scene(scene, Resolution(args.around, args.along))
+    meshes = mesh_scene(scene, Resolution(args.around, args.along), max_memory=args.max_memory)
     written = write_page(output, scene, meshes)
     return f"{output}: {len(meshes)} surface{'s' if len(meshes) != 1 else ''}, {time.perf_counter() - start:.2f} s, {written} bytes"

@@ -21,13 +21,13 @@ ALL = [".glb", ".gltf", ".usda", ".usdc", ".usd", ".usdz", ".obj", ".ply", ".stl
 def test_several_outputs_are_written_from_one_meshing(tmp_path, capsys, monkeypatch):
     pytest.importorskip("pxr")
     calls = []
-    original = cgamesh.pipeline.mesh_surface
+    original = cgamesh.pipeline.mesh_planned
 
-    def counting(spec, *args, **kwargs):
-        calls.append(spec.name)
-        return original(spec, *args, **kwargs)
+    def counting(plan, *args, **kwargs):
+        calls.append(plan.spec.name)
+        return original(plan, *args, **kwargs)
 
-    monkeypatch.setattr(cgamesh.pipeline, "mesh_surface", counting)
+    monkeypatch.setattr(cgamesh.pipeline, "mesh_planned", counting)
     outputs = [tmp_path / f"tube{suffix}" for suffix in ALL]
     assert main([str(EXAMPLE), *[a for o in outputs for a in ("-o", str(o))], *LOW]) == 0
     assert calls == ["kb_tube"]

@@ -4,18 +4,166 @@ The data goes to a temporary file in the target's own directory (so the final re
 one file system and is atomic), is flushed and fsynced, and then replaces the target with
 ``os.replace``. If anything fails before that, the temporary file is removed and an existing
 target is left exactly as it was.
+
+All or nothing across files: inside ``all_or_nothing()`` every write (each output of a run and
+each sidecar of each, the report) only stages its finished temporary; when the block succeeds
+they are all renamed into place together, and when anything fails (an exception, SIGTERM or
+SIGINT raised as an exception by the command line) every staged temporary is removed and no
+target is touched. A commit (the renames of one write, or of a whole ``all_or_nothing``):
+
+- holds an exclusive advisory lock (``fcntl.flock``) on each target's directory, taken in
+  sorted order, so two processes committing into one folder take turns: a .gltf and its .bin
+  (an .obj and its .mtl) always come from the same run, never a mix of two;
+- blocks SIGINT and SIGTERM while it renames (a signal then arrives after the commit);
+- keeps a hard link to each old target first, so that if a rename fails half way the targets
+  already replaced get their old files back.
+
+Every temporary file alive is listed in ``LIVE_TEMPORARIES``; ``remove_live_temporaries()``
+is the command line's last resort on an interrupt.
 """
 
 from __future__ import annotations
 
 import os
 import secrets
+import signal
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import BinaryIO
 
 from cgamesh.errors import ExportError
+
+try:
+    import fcntl
+except ImportError:  # not on Windows: commits there are not serialised between processes
+    fcntl = None
+
+LIVE_TEMPORARIES: set[Path] = set()
+_STAGES: list[list[tuple[Path, Path]]] = []  # open all_or_nothing blocks, innermost last
+_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+
+
+@contextmanager
+def all_or_nothing() -> Iterator[None]:
+    """Stage every atomic write made inside the block; rename them all into place when it
+    succeeds, remove them all when it fails (see the module doc)."""
+    staged: list[tuple[Path, Path]] = []
+    _STAGES.append(staged)
+    try:
+        yield
+    except BaseException:
+        _STAGES.remove(staged)
+        for tmp, _ in staged:
+            _remove_quietly(tmp)
+        raise
+    _STAGES.remove(staged)
+    if _STAGES:  # nested: the outer block commits
+        _STAGES[-1].extend(staged)
+        return
+    try:
+        _commit(staged)
+    except BaseException:
+        for tmp, _ in staged:
+            _remove_quietly(tmp)
+        raise
+
+
+def remove_live_temporaries() -> None:
+    """Remove every temporary file this process has created and not yet renamed or removed."""
+    for tmp in list(LIVE_TEMPORARIES):
+        _remove_quietly(tmp)
+
+
+def _finish(pairs: list[tuple[Path, Path]]) -> None:
+    """The temporaries of one write are complete: stage them, or commit them now."""
+    if _STAGES:
+        _STAGES[-1].extend(pairs)
+    else:
+        _commit(pairs)
+
+
+def _commit(pairs: list[tuple[Path, Path]]) -> None:
+    """Rename every (temporary, target) into place, under the directories' locks, signals held
+    back, rolling back on a failed rename; an OSError becomes a one-line ExportError."""
+    if not pairs:
+        return
+    directories = sorted({str(target.parent.resolve()) for _, target in pairs})
+    blocked = _block_signals()
+    locks = []
+    backups: list[tuple[Path, Path]] = []  # (hard link to the old file, target)
+    replaced: list[Path] = []
+    try:
+        for directory in directories:
+            locks.append(_lock(directory))
+        for _, target in pairs:
+            backup = _backup(target)
+            if backup is not None:
+                backups.append((backup, target))
+        for tmp, target in pairs:
+            try:
+                os.replace(tmp, target)
+            except OSError as exc:
+                raise ExportError(f"cannot write {target}: {_reason(exc, target)}") from exc
+            LIVE_TEMPORARIES.discard(tmp)
+            replaced.append(target)
+    except BaseException:
+        old = {target: backup for backup, target in backups}
+        for target in replaced:  # put back what was there
+            if target in old:
+                try:
+                    os.replace(old.pop(target), target)
+                except OSError:
+                    pass
+            else:
+                _remove_quietly(target)
+        raise
+    finally:
+        for backup, _ in backups:
+            _remove_quietly(backup)
+        for fd in locks:
+            os.close(fd)  # releases the lock
+        _unblock_signals(blocked)
+    for directory in directories:
+        _fsync_directory(Path(directory))
+
+
+def _lock(directory: str) -> int:
+    """An exclusive flock on the directory itself (no lock file is left behind); its fd."""
+    fd = os.open(directory, os.O_RDONLY)
+    if fcntl is not None:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        except OSError:
+            pass  # a file system without flock: the renames are still each atomic
+    return fd
+
+
+def _backup(target: Path) -> Path | None:
+    """A hard link to the existing target beside it (None: no target, or no hard links here)."""
+    if not target.is_file():
+        return None
+    while True:
+        link = target.parent / f".{target.name}.{secrets.token_hex(6)}.old"
+        try:
+            os.link(target, link)
+        except FileExistsError:
+            continue
+        except OSError:
+            return None
+        LIVE_TEMPORARIES.add(link)
+        return link
+
+
+def _block_signals():
+    if hasattr(signal, "pthread_sigmask"):
+        return signal.pthread_sigmask(signal.SIG_BLOCK, _SIGNALS)
+    return None
+
+
+def _unblock_signals(previous) -> None:
+    if previous is not None:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 @contextmanager
@@ -64,8 +212,7 @@ def atomic_files(paths: list[str | os.PathLike[str]]) -> Iterator[list[BinaryIO]
             f.flush()
             os.fsync(f.fileno())
             f.close()
-        for tmp, target in zip(temps, targets):
-            os.replace(tmp, target)
+        _finish(list(zip(temps, targets)))
     except BaseException as exc:
         for f in handles:
             try:
@@ -79,8 +226,6 @@ def atomic_files(paths: list[str | os.PathLike[str]]) -> Iterator[list[BinaryIO]
                           targets[0])
             raise ExportError(f"cannot write {failed}: {_reason(exc, failed)}") from exc
         raise
-    for directory in {t.parent for t in targets}:
-        _fsync_directory(directory)
 
 
 @contextmanager
@@ -110,13 +255,12 @@ def _replacing(tmp: Path, target: Path) -> Iterator[None]:
     (leaving ``target`` untouched) and turn an OSError into a one-line ExportError."""
     try:
         yield
-        os.replace(tmp, target)
+        _finish([(tmp, target)])
     except BaseException as exc:
         _remove_quietly(tmp)
         if isinstance(exc, OSError):
             raise ExportError(f"cannot write {target}: {_reason(exc, target)}") from exc
         raise
-    _fsync_directory(target.parent)
 
 
 def _create_temp_beside(target: Path, suffix: str = "") -> tuple[Path, int]:
@@ -125,14 +269,18 @@ def _create_temp_beside(target: Path, suffix: str = "") -> tuple[Path, int]:
     while True:
         # A hidden name so that directory listings and globs (*.glb) do not pick it up.
         tmp = directory / f".{target.name}.{secrets.token_hex(6)}.tmp{suffix}"
+        blocked = _block_signals()  # an interrupt between creating and listing it would leak it
         try:
             # os.open with mode 0o666 lets the umask decide the final permissions, as a plain
             # open() would (tempfile.mkstemp would force 0o600 on the finished file).
             fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+            LIVE_TEMPORARIES.add(tmp)
         except FileExistsError:
             continue
         except OSError as exc:
             raise ExportError(f"cannot write {target}: {_reason(exc, target)}") from exc
+        finally:
+            _unblock_signals(blocked)
         return tmp, fd
 
 
@@ -143,6 +291,7 @@ def _reason(exc: OSError, target: Path) -> str:
 
 
 def _remove_quietly(tmp: Path) -> None:
+    LIVE_TEMPORARIES.discard(tmp)
     try:
         tmp.unlink()
     except FileNotFoundError:

@@ -51,6 +51,49 @@ def writer_for(path: str | os.PathLike[str]) -> Writer:
     return WRITERS[suffix]
 
 
+def vertices_written(path: str | os.PathLike[str], surfaces: Sequence[tuple[SurfaceMesh, Material]]) -> tuple[int, str]:
+    """(count, word) of the vertices a file of this format holds for ``surfaces``: USD welds
+    them into points; STL stores three corners per triangle; the others keep every vertex."""
+    suffix = Path(path).suffix.lower()
+    if suffix in (".usda", ".usdc", ".usd", ".usdz"):
+        from cgamesh.export.usd import point_count
+
+        return point_count(surfaces), "points"
+    if suffix == ".stl":
+        return 3 * sum(mesh.triangle_count for mesh, _ in surfaces), "triangle corners"
+    return sum(mesh.vertex_count for mesh, _ in surfaces), "vertices"
+
+
+def written_files(path: str | os.PathLike[str]) -> list[Path]:
+    """Every file writing ``path`` creates or replaces: the file and its sidecar (.gltf: STEM.bin,
+    .obj: STEM.mtl)."""
+    path = Path(path)
+    sidecar = {".gltf": ".bin", ".obj": ".mtl"}.get(path.suffix.lower())
+    return [path] if sidecar is None else [path, path.with_suffix(sidecar)]
+
+
+def check_distinct(outputs: Sequence[str | os.PathLike[str]], report: str | os.PathLike[str] | None = None,
+                   scene: str | os.PathLike[str] | None = None) -> None:
+    """InvalidInputError unless every file a run writes is a different file, and none is the
+    scene: two -o naming one file (or one's sidecar), or --report naming an output, would
+    overwrite one output with another."""
+    claimed: dict[str, str] = {}
+
+    def claim(path: Path, by: str) -> None:
+        key = os.path.realpath(path)
+        if key in claimed:
+            raise InvalidInputError(f"{by} would overwrite {claimed[key]}: give each output its own file")
+        claimed[key] = by
+
+    if scene is not None:
+        claimed[os.path.realpath(scene)] = f"the scene file {scene}"
+    for output in outputs:
+        for file in written_files(output):
+            claim(file, f"-o {output}" if file == Path(output) else f"-o {output} (its {file.name})")
+    if report is not None:
+        claim(Path(report), f"--report {report}")
+
+
 def write(path: str | os.PathLike[str], surfaces: Sequence[tuple[SurfaceMesh, Material]], *, up: str,
           meters_per_unit: float, source_units: str, tangents: bool = False, quantize: bool = False) -> int:
     """Write ``surfaces`` in the format of ``path``'s extension; returns the bytes written."""

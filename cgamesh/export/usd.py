@@ -93,10 +93,18 @@ def write_usd(
                     write_package(crate, archive, crate.name)
                 except PackageTooLargeError as exc:
                     raise ExportError(f"cannot write {target}: {exc}; write .usdc instead") from None
+                size = archive.tell()
     else:
         with atomic_path(target) as tmp:
             _export(layer, tmp, target)
-    return target.stat().st_size
+            size = tmp.stat().st_size  # the target is renamed into place later in a multi-output commit
+    return size
+
+
+def point_count(surfaces: Sequence[tuple[SurfaceMesh, Material]]) -> int:
+    """The points a USD file of these surfaces holds: each mesh's vertices welded by position
+    (the seam column and cap rims repeat vertices that glTF keeps apart)."""
+    return sum(len(welded(mesh)[0]) for mesh, _ in surfaces)
 
 
 def _scratch_dir() -> str | None:

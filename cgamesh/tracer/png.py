@@ -42,6 +42,54 @@ def write_png(path: str | os.PathLike, image: np.ndarray) -> int:
     return len(data)
 
 
+class PngStream:
+    """A PNG written row band by row band: ``with PngStream(path, w, h) as png: png.add_rows(rows)``.
+
+    The rows are compressed as they come, so no whole image is held; the file is written
+    atomically (a temporary, renamed into place when every row has come). ``size``: the bytes
+    written, once the block has ended."""
+
+    def __init__(self, path: str | os.PathLike, width: int, height: int) -> None:
+        self.path, self.width, self.height = path, width, height
+        self.size = 0
+        self._rows = 0
+
+    def __enter__(self) -> "PngStream":
+        self._context = atomic_write(self.path)
+        self._stream = self._context.__enter__()
+        self._compressor = zlib.compressobj(9)
+        header = struct.pack(">IIBBBBB", self.width, self.height, 8, 2, 0, 0, 0)
+        self._write(_SIGNATURE + _chunk(b"IHDR", header))
+        return self
+
+    def add_rows(self, rows: np.ndarray) -> None:
+        """Append rows (n, width, 3): uint8, or floats in [0, 1] (clipped, rounded)."""
+        rows = np.asarray(rows)
+        if rows.dtype != np.uint8:
+            rows = np.round(np.clip(rows, 0.0, 1.0) * 255.0).astype(np.uint8)
+        raw = np.concatenate([np.zeros((len(rows), 1), dtype=np.uint8), rows.reshape(len(rows), 3 * self.width)], axis=1)
+        self._rows += len(rows)
+        data = self._compressor.compress(raw.tobytes())
+        if data:
+            self._write(_chunk(b"IDAT", data))
+
+    def __exit__(self, kind, value, traceback) -> bool:
+        if kind is None:
+            try:
+                if self._rows != self.height:
+                    raise ValueError(f"a PNG of {self.height} rows was given {self._rows}")
+                self._write(_chunk(b"IDAT", self._compressor.flush()) + _chunk(b"IEND", b""))
+            except BaseException as error:
+                self._context.__exit__(type(error), error, error.__traceback__)  # removes the temporary
+                raise
+            return bool(self._context.__exit__(None, None, None))
+        return bool(self._context.__exit__(kind, value, traceback))
+
+    def _write(self, data: bytes) -> None:
+        self._stream.write(data)
+        self.size += len(data)
+
+
 def read_png(path: str | os.PathLike) -> np.ndarray:
     """(H, W, 3) uint8 pixels of an 8-bit RGB or RGBA, non-interlaced PNG (alpha dropped).
 

@@ -166,9 +166,10 @@ def summarise(name: str, check: VertexCheck, breaks: np.ndarray | None = None, f
     return SurfaceReport(name, count, missed, *stats, broken, facing, bool(passed))
 
 
-def check_mesh(surface: TracedSurface, mesh, thresholds: Thresholds = Thresholds()) -> SurfaceReport:
-    """The whole check of one mesh (MeshData or SurfaceMesh: positions, normals, faces)."""
-    check = check_vertices(surface, mesh.positions, mesh.normals, thresholds.max_distance)
+def check_mesh(surface: TracedSurface, mesh, thresholds: Thresholds = Thresholds(), chunk: int = 16384) -> SurfaceReport:
+    """The whole check of one mesh (MeshData or SurfaceMesh: positions, normals, faces); its
+    vertices traced ``chunk`` at a time."""
+    check = check_vertices(surface, mesh.positions, mesh.normals, thresholds.max_distance, chunk)
     breaks = sign_breaks(check, mesh.normals, np.asarray(mesh.faces))
     return summarise(surface.name, check, breaks, outward(surface, check, mesh.normals), thresholds)
 
@@ -190,11 +191,17 @@ def format_reports(reports: list[SurfaceReport], thresholds: Thresholds = Thresh
 
 
 def verify_meshes(world_surfaces: list[TracedSurface], meshes, thresholds: Thresholds = Thresholds(),
-                  progress=lambda label="": None) -> list[SurfaceReport]:
+                  progress=lambda label="": None, max_memory=None) -> list[SurfaceReport]:
     """A report per traced surface, with the mesh of the same name (MeshData) checked against it.
 
-    Raises InvalidInputError when a surface has no mesh of its name in the file.
+    Raises InvalidInputError when a surface has no mesh of its name in the file. The vertices
+    are traced in chunks that fit ``max_memory`` (cgamesh.budget); ResourceLimitError when not
+    even one ray fits, or a surface's polynomials are past the tracer's limit.
     """
+    from cgamesh.budget import Budget
+    from cgamesh.tracer.ray_budget import rays_at_once
+
+    chunk = rays_at_once(world_surfaces, Budget.of(max_memory), "verify", 16384)
     by_name = {mesh.name: mesh for mesh in meshes}
     reports = []
     for surface in world_surfaces:
@@ -202,12 +209,12 @@ def verify_meshes(world_surfaces: list[TracedSurface], meshes, thresholds: Thres
         if mesh is None:
             raise InvalidInputError(f"the mesh file has no mesh named {surface.name!r} (it has "
                                     f"{', '.join(sorted(by_name)) or 'none'})")
-        reports.append(check_mesh(surface, mesh, thresholds))
+        reports.append(check_mesh(surface, mesh, thresholds, chunk))
         progress(surface.name)
     return reports
 
 
-def comparison_image(world, meshes, width: int, height: int) -> np.ndarray:
+def comparison_image(world, meshes, width: int, height: int, max_memory=None) -> np.ndarray:
     """[traced | mesh | 4 x |difference|] side by side (height, 3 width, 3), for ``verify --image``.
 
     ``world``: the scene's surfaces only, without shadows or reflections (both halves are
@@ -216,7 +223,7 @@ def comparison_image(world, meshes, width: int, height: int) -> np.ndarray:
     from cgamesh.tracer.raster import rasterise
     from cgamesh.tracer.render import render
 
-    traced = render(world, width, height)
+    traced = render(world, width, height, max_memory=max_memory)
     materials = {s.name: s.material for s in world.surfaces()}
     drawn, _ = rasterise(world, [(m.positions, m.normals, m.faces, materials[m.name]) for m in meshes
                                  if m.name in materials], width, height)

@@ -3,19 +3,32 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from math import comb
+from math import comb, lgamma
 
 import numpy as np
 
 from cgamesh.geometry.curves import CurveBasis
 
 
+# Up to this order the binomial coefficients and the powers are exact enough as they are;
+# beyond it C(N, i) overflows float64 (near N = 1030) while alpha^i (1 - alpha)^(N - i)
+# underflows, so the product is formed from logarithms instead.
+DIRECT_ORDER = 60
+
+
 def bernstein(order: int, alpha: np.ndarray) -> np.ndarray:
-    """Bernstein polynomials b_{i,N}(alpha), shape (A, N + 1)."""
+    """Bernstein polynomials b_{i,N}(alpha), shape (A, N + 1), for any order N."""
     alpha = np.asarray(alpha, dtype=np.float64)[:, None]
     i = np.arange(order + 1)
-    coefficients = np.array([comb(order, k) for k in i], dtype=np.float64)
-    return coefficients * alpha**i * (1.0 - alpha) ** (order - i)
+    if order <= DIRECT_ORDER:
+        coefficients = np.array([comb(order, k) for k in i], dtype=np.float64)
+        return coefficients * alpha**i * (1.0 - alpha) ** (order - i)
+    log_coefficients = np.array([lgamma(order + 1) - lgamma(k + 1) - lgamma(order - k + 1) for k in i])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        log_a, log_b = np.log(alpha), np.log1p(-alpha)
+        # i log(alpha) with i = 0 is 0 even at alpha = 0 (0^0 = 1), likewise for 1 - alpha.
+        powers = np.where(i == 0, 0.0, i * log_a) + np.where(i == order, 0.0, (order - i) * log_b)
+    return np.exp(log_coefficients + powers)
 
 
 def bernstein_derivative(order: int, alpha: np.ndarray) -> np.ndarray:
