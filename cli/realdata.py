@@ -78,7 +78,7 @@ def run(args: argparse.Namespace) -> str | int:
         raise InvalidInputError("--watertight makes one surface; it cannot be combined with --split")
     from cgamesh.budget import Budget, centerline_bytes
     from cgamesh.export.atomic import all_or_nothing
-    from cgamesh.export.registry import check_distinct
+    from cgamesh.export.registry import check_distinct, vertices_written
 
     check_distinct(outputs, args.report, args.scene)
     start = time.perf_counter()
@@ -106,14 +106,14 @@ def run(args: argparse.Namespace) -> str | int:
 
             failures = _write_report(args.report, list(built.meshes), args.scene)
     seconds = time.perf_counter() - start
-    vertices = sum(m.vertex_count for m in built.meshes)
     triangles = sum(m.triangle_count for m in built.meshes)
+    held = [vertices_written(output, surfaces) for output in outputs]  # what each file holds (USD welds)
     kind = "streamlines" if lines.offsets is not None else "segments"
     skipped = f" ({len(built.skipped)} skipped)" if built.skipped else ""
     summary = "\n".join(
         f"{output}: {built.chains} {kind}{skipped}, {len(built.meshes)} mesh{'es' if len(built.meshes) != 1 else ''}, "
-        f"{vertices} vertices, {triangles} triangles, {seconds:.2f} s, {size} bytes"
-        for output, size in zip(outputs, written))
+        f"{count} {word}, {triangles} triangles, {seconds:.2f} s, {size} bytes"
+        for output, size, (count, word) in zip(outputs, written, held))
     for line in built.skipped:
         print(f"cgamesh: skipped: {line}", file=sys.stderr)
     if failures:
