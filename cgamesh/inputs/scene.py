@@ -157,9 +157,11 @@ def load_scene(path: str | os.PathLike) -> Scene:
     except OSError as exc:
         raise SceneFileError(f"{file}: cannot read the scene file: {exc.strerror or exc}") from exc
     except UnicodeDecodeError as exc:
+        line = exc.object.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (exc.object.rfind(b"\n", 0, exc.start) + 1) + 1
         raise SceneFileError(
-            f"{file}: the scene file must be UTF-8 text, got byte 0x{exc.object[exc.start]:02x} "
-            f"at offset {exc.start}") from exc
+            f"{file}:{line}: the scene file must be UTF-8 text, got byte 0x{exc.object[exc.start]:02x} "
+            f"in column {column}") from exc
     return parse_scene(text, file)
 
 
@@ -432,6 +434,20 @@ class _CoreLoader(yaml.SafeLoader):
     yaml_implicit_resolvers = {None: [(tag, _CORE_PATTERNS[tag])
                                       for tag in (_NULL, _BOOL, _INT, _FLOAT)]}
 
+    def scan_to_next_token(self) -> None:
+        """PyYAML's, also skipping tabs between tokens of a line (YAML 1.2's s-separate-in-line:
+        ``[1,<tab>2]`` is valid). A tab in a block line's indentation is still refused."""
+        while True:
+            super().scan_to_next_token()
+            if self.peek() != "\t" or not self._within_line():
+                return
+            while self.peek() in " \t":
+                self.forward()
+
+    def _within_line(self) -> bool:
+        """In a flow collection, or past the indentation of the current line."""
+        return self.flow_level > 0 or self.buffer[self.pointer - self.column:self.pointer].strip(" ") != ""
+
 
 def _compose(text: str, file: str) -> yaml.Node | None:
     """The document's node tree (None if empty); YAML errors become one-line SceneFileErrors."""
@@ -451,7 +467,25 @@ def _compose(text: str, file: str) -> yaml.Node | None:
         raise SceneFileError(f"{file}:{line}: invalid YAML: character #x{exc.character:04x} is "
                              f"not allowed ({exc.reason})") from exc
     except RecursionError as exc:
-        raise SceneFileError(f"{file}: invalid YAML: nested too deeply") from exc
+        depth, line = _deepest(text)
+        raise SceneFileError(f"{file}:{line}: invalid YAML: nested too deeply ({depth} levels of "
+                             "lists and mappings)") from exc
+
+
+def _deepest(text: str) -> tuple[int, int]:
+    """(greatest nesting depth, 1-based line where it is first reached) of a YAML text, from its
+    parse events: the parser keeps an explicit stack, so this works where composing the node
+    tree (recursive) runs out of stack."""
+    depth = deepest = 0
+    line = 1
+    for event in yaml.parse(text, Loader=_CoreLoader):
+        if isinstance(event, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
+            depth += 1
+            if depth > deepest:
+                deepest, line = depth, event.start_mark.line + 1
+        elif isinstance(event, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
+            depth -= 1
+    return deepest, line
 
 
 def _core_value(node: yaml.ScalarNode) -> object:

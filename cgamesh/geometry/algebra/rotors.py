@@ -33,10 +33,10 @@ def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The smallest rotation rotor taking unit vectors a to b, each (..., 3) -> (..., 32).
 
     R = (1 + b a) / |1 + b a|. For b = -a any half turn works; the axis is then a unit
-    vector perpendicular to a, chosen deterministically.
+    vector perpendicular to a, chosen deterministically. a and b broadcast against each other
+    (one fixed vector against a batch, as the first ring of a tube is carried from e3).
     """
-    a = np.asarray(a, dtype=np.float64)
-    b = np.asarray(b, dtype=np.float64)
+    a, b = np.broadcast_arrays(np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64))
     rotor = _scalar(np.ones(a.shape[:-1])) + products.geometric(vector(b), vector(a), (1,), (1,), (0, 2))
     norm = np.sqrt(rotor[..., 0] ** 2 + rotor[..., _E12] ** 2 + rotor[..., _E13] ** 2 + rotor[..., _E23] ** 2)
     opposite = norm < 1e-8
