@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 
 from cgamesh.meshing import uv as uv_map
 from cgamesh.geometry.construction import build_surface, make_curve  # noqa: F401 (part of this module's API)
@@ -18,6 +19,9 @@ from cgamesh.meshing.circles import mesh_circle_surface
 from cgamesh.meshing.ribbons import mesh_ribbon_surface
 from cgamesh.inputs.scene import Scene, SurfaceSpec
 from cgamesh.meshing.tessellation import mesh_to_tolerance, ribbon_to_tolerance
+
+
+FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 @dataclass(frozen=True)
@@ -41,8 +45,9 @@ def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
     if tolerance is None:
         around = resolution.around or spec.around
         along = resolution.along or spec.along
-        if spec.type == "circles" and around < 3:
-            raise InvalidInputError(f"{spec.location}: a circle needs at least 3 vertices around, got {around}")
+        if spec.type == "circles" and around < 3:  # the file's own resolution is checked on loading
+            raise InvalidInputError(f"--around must be at least 3 for the circles of surface {spec.name!r} "
+                                    f"({spec.location.file}:{spec.location.line}), got {around}")
     surface = build_surface(spec)
     try:
         if spec.type == "point_pairs":  # caps are circles only (the scene loader refuses them here)
@@ -52,7 +57,7 @@ def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
         if tolerance is not None:
             return mesh_to_tolerance(surface, tolerance, caps=spec.caps, closed=spec.closed, tangents=tangents)
         return mesh_circle_surface(surface, around, along, caps=spec.caps, closed=spec.closed,
-                                   with_tangents=tangents)
+                                   with_tangents=tangents, distinct=True)
     except CgameshError as error:
         raise type(error)(f"{spec.location}: {error}") from None
 
@@ -73,6 +78,17 @@ def _tolerance(spec: SurfaceSpec, resolution: Resolution) -> float | None:
     return spec.tolerance
 
 
+def _check_uv_scale(mesh: SurfaceMesh, spec: SurfaceSpec) -> None:
+    """Refuse a ``uv_scale`` so small that texture coordinates would leave float32's range
+    (every output stores them in float32, and they would be written as infinities)."""
+    if spec.uv != "natural" or spec.uv_scale is None:
+        return
+    least = uv_map.natural_extent(mesh) / FLOAT32_MAX
+    if spec.uv_scale < least:
+        raise InvalidInputError(f"{spec.location}.uv_scale must be at least {least:.3g} for this surface "
+                                f"(its texture coordinates would overflow float32), got {spec.uv_scale!r}")
+
+
 def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lambda label: None,
                tangents: bool = False) -> list[tuple[SurfaceMesh, Material]]:
     """Every surface's mesh with its material, in file order; ``progress(name)`` after each.
@@ -84,5 +100,7 @@ def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lam
     for spec in scene.surfaces:
         meshes.append(mesh_surface(spec, resolution, tangents))
         progress(spec.name)
+    for mesh, spec in zip(meshes, scene.surfaces):
+        _check_uv_scale(mesh, spec)
     meshes = uv_map.apply_uv_modes(meshes, [(spec.uv, spec.uv_scale) for spec in scene.surfaces])
     return [(mesh, spec.material) for mesh, spec in zip(meshes, scene.surfaces)]

@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> str:
     if args.tolerance is not None and (args.around is not None or args.along is not None):
         raise InvalidInputError("--tolerance cannot be combined with --around or --along")
     start = time.perf_counter()
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, rendering=False)  # the rendering keys are render's and verify's
     with Progress(len(scene.surfaces), enabled=not args.quiet) as progress:
         meshes = mesh_scene(scene, Resolution(args.around, args.along, args.tolerance), progress=progress.advance,
                             tangents=args.tangents)

@@ -20,6 +20,7 @@ from cgamesh.meshing.mesh import SurfaceMesh
 # this from unit length is a bug upstream (SurfaceMesh promises unit normals), not rounding.
 NORMAL_LENGTH_TOLERANCE = 1e-3
 UP_AXES = ("z", "y")
+FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 def check_arguments(path, surfaces: Sequence, up: str, meters_per_unit: float) -> float:
@@ -72,6 +73,10 @@ def check_values(mesh: SurfaceMesh, path) -> Measured:
         bounds[name] = column_bounds(np.asarray(getattr(mesh, name), dtype=np.float64))
         if not np.isfinite(bounds[name]).all():
             raise ExportError(f"{where}: {name} contain NaN or infinity")
+        # Files store them in float32 (PLY, STL, USD): beyond its range they would be infinities.
+        if np.abs(bounds[name]).max() > FLOAT32_MAX:
+            raise ExportError(f"{where}: {name} exceed float32's range (largest "
+                              f"{np.abs(bounds[name]).max():.3g}); no output can store them")
     return Measured(bounds["positions"], normal_lengths(mesh, path))
 
 

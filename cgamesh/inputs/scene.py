@@ -17,7 +17,7 @@ import difflib
 import math
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import yaml
 
@@ -38,6 +38,7 @@ CLOSABLE_CURVES = ("kb", "catmull_rom")
 DEFAULT_AROUND = 64
 DEFAULT_ALONG = 128
 MAX_RESOLUTION = 1_000_000
+MAX_WEIGHT_RATIO = 1e12  # largest / smallest rational Bezier weight of one surface
 NAME_PATTERN = "[A-Za-z_][A-Za-z0-9_]*"
 
 _TOP_KEYS = ("cgamesh", "units", "up", "surfaces") + RENDERING_KEYS
@@ -148,8 +149,12 @@ class Scene:
     attenuation: Attenuation = Attenuation()
 
 
-def load_scene(path: str | os.PathLike) -> Scene:
-    """Read and validate the scene file at ``path`` (UTF-8, an optional BOM allowed)."""
+def load_scene(path: str | os.PathLike, rendering: bool = True) -> Scene:
+    """Read and validate the scene file at ``path`` (UTF-8, an optional BOM allowed).
+
+    ``rendering``: also read the rendering keys (camera, lights, objects, ...); meshing leaves
+    them unread, so a mistake there stops only the commands that render.
+    """
     file = os.fsdecode(path)
     try:
         with open(file, encoding="utf-8-sig") as stream:
@@ -162,11 +167,12 @@ def load_scene(path: str | os.PathLike) -> Scene:
         raise SceneFileError(
             f"{file}:{line}: the scene file must be UTF-8 text, got byte 0x{exc.object[exc.start]:02x} "
             f"in column {column}") from exc
-    return parse_scene(text, file)
+    return parse_scene(text, file, rendering)
 
 
-def parse_scene(text: str, path: str = "<string>") -> Scene:
-    """Validate scene-file ``text``; ``path`` only names the file in error messages."""
+def parse_scene(text: str, path: str = "<string>", rendering: bool = True) -> Scene:
+    """Validate scene-file ``text``; ``path`` only names the file in error messages;
+    ``rendering`` as for ``load_scene``."""
     root = _compose(text, path)
     r = _Reader(path)
     if root is None:
@@ -190,10 +196,12 @@ def parse_scene(text: str, path: str = "<string>") -> Scene:
     names_taken: dict[str, Location] = {}
     surfaces = tuple(_surface(r, item, f"surfaces[{i}]", names_taken)
                      for i, item in enumerate(items))
-    rendering = parse_rendering(r, entries, up)
-    return Scene(path, version, units, METERS_PER_UNIT[units], up, surfaces, rendering.camera,
-                 rendering.lights, rendering.objects, rendering.background, rendering.max_depth,
-                 rendering.attenuation)
+    scene = Scene(path, version, units, METERS_PER_UNIT[units], up, surfaces)
+    if not rendering:
+        return scene
+    keys = parse_rendering(r, entries, up)
+    return replace(scene, camera=keys.camera, lights=keys.lights, objects=keys.objects,
+                   background=keys.background, max_depth=keys.max_depth, attenuation=keys.attenuation)
 
 
 # --- sections ----------------------------------------------------------------------------------
@@ -270,7 +278,15 @@ def _controls(r: _Reader, node: yaml.Node, path: str, kind: str, curve: str,
     if len(items) < minimum:
         raise r.wrong(node, path, expected)
     read = _circle if kind == "circles" else _point_pair
-    return tuple(read(r, item, f"{path}[{i}]", curve) for i, item in enumerate(items))
+    controls = tuple(read(r, item, f"{path}[{i}]", curve) for i, item in enumerate(items))
+    largest = max(control.weight for control in controls)
+    for control in controls:
+        # Only the ratios of weights matter; a control weighing 1e-12 of another is absent
+        # except at its own end, where the curve would jump.
+        if control.weight * MAX_WEIGHT_RATIO < largest:
+            raise SceneFileError(f"{control.location}.weight must be at least {1.0 / MAX_WEIGHT_RATIO:g} "
+                                 f"times the largest weight ({largest!r}), got {control.weight!r}")
+    return controls
 
 
 def _weight(r: _Reader, entries: dict, path: str, curve: str) -> float:
