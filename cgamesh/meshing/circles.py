@@ -384,31 +384,37 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
 
 def distinct_rings(centre: np.ndarray, normal: np.ndarray, radius: np.ndarray, size: float,
                    name: str) -> np.ndarray:
-    """Which rings (K,) bool to mesh: those that moved by more than DISTINCT_RING_FRACTION of the
-    surface's size from the ring before, and always the first and the last.
+    """Which rings (K,) bool to mesh: each kept ring lies more than DISTINCT_RING_FRACTION of the
+    surface's size along the surface from the ring kept before it; the first and the last are kept.
 
     Rings closer than that (along a segment between nearly identical controls) would give
-    triangles of no area once positions are rounded to float32 in an output file. The bound on
-    how far any vertex moved, |dc| + |dr| + r |dn|, never underestimates, so no ring that
-    moved measurably is dropped. Where the last ring is too near the ring kept before it, that
-    one gives way (the surface's end stays where it is).
+    triangles of no area once positions are rounded to float32 in an output file. Distance
+    along is the running sum of a bound on how far any vertex moves between consecutive rings,
+    |dc| + |dr| + r |dn|, which never underestimates, so where rings are apart (the usual case)
+    every one is kept. Elsewhere the first ring of each stretch of that length is kept, and one
+    that follows the previous kept ring too closely (two stretches' first rings can straddle
+    their boundary) gives way. Where the last ring is too near the ring kept before it, that
+    one gives way instead (the surface's end stays where it is).
     """
     centre, radius = centre / size, radius / size  # relative: no length of 1e-300 underflows
     step = (np.linalg.norm(np.diff(centre, axis=0), axis=1) + np.abs(np.diff(radius))
             + np.maximum(radius[1:], radius[:-1]) * np.linalg.norm(np.diff(normal, axis=0), axis=1))
-    keep = np.concatenate([[True], step > DISTINCT_RING_FRACTION])
-    if keep.all():
-        return keep
-    kept = np.flatnonzero(keep)
-    if kept.size == 1:
+    if np.all(step > DISTINCT_RING_FRACTION):
+        return np.ones(len(centre), dtype=bool)
+    along = np.concatenate([[0.0], np.cumsum(step)])
+    if along[-1] <= DISTINCT_RING_FRACTION:
         raise DegenerateGeometryError(
             f"surface '{name}': every circle of the surface lies within {DISTINCT_RING_FRACTION:g} of its "
             "size of the first, so it has no area to mesh")
-    if not keep[-1]:
-        keep[kept[-1] if kept[-1] > 0 else -1] = False
-        keep[-1] = True
-        if np.count_nonzero(keep) < 2:
-            keep[0] = True
+    stretch = np.floor(along / DISTINCT_RING_FRACTION)
+    first = np.flatnonzero(np.concatenate([[True], stretch[1:] > stretch[:-1]]))
+    first = first[np.concatenate([[True], np.diff(along[first]) > DISTINCT_RING_FRACTION])]
+    if first[-1] != len(along) - 1:
+        if along[-1] - along[first[-1]] <= DISTINCT_RING_FRACTION and len(first) > 1:
+            first = first[:-1]
+        first = np.append(first, len(along) - 1)
+    keep = np.zeros(len(along), dtype=bool)
+    keep[first] = True
     return keep
 
 
