@@ -128,7 +128,7 @@ def test_any_finite_non_zero_normal_is_a_direction(tmp_path, normal):
     np.testing.assert_allclose(np.linalg.norm(ring, axis=1), 1.0, atol=1e-6)
 
 
-@pytest.mark.parametrize("radius", ["1.0e-300", "1.0e30"])
+@pytest.mark.parametrize("radius", ["1.0e-300", "1.0e29"])
 def test_tubes_of_extreme_size(tmp_path, radius):
     r = float(radius)
     controls = [f"{{center: [0, 0, 0], normal: [0, 0, 1], radius: {radius}}}",
@@ -229,3 +229,21 @@ def test_tabs_between_tokens_are_yaml_1_2(tmp_path):
     path = tmp_path / "indent.yaml"
     path.write_text(scene([RING, SMALLER]).replace("  - name", "\t- name"))
     refused([path, "-o", tmp_path / "x.glb"], r"indent\.yaml:3: invalid YAML")
+
+
+def test_a_ribbon_through_an_end_point_at_infinity_is_refused(tmp_path):
+    """Two parallel, translated segments, linearly interpolated: the pair halfway has an end at infinity."""
+    path = tmp_path / "flat.yaml"
+    path.write_text("cgamesh: 1\nsurfaces:\n  - name: s\n    type: point_pairs\n    curve: linear\n    controls:\n"
+                    "      - {a: [0.0, 0.0, 0.0], b: [1.0, 0.0, 0.0]}\n"
+                    "      - {a: [1.3416407864998738, 0.0, 0.6708203932499369], b: [2.341640786499874, 0.0, 0.6708203932499369]}\n")
+    refused([path, "-o", tmp_path / "x.glb", "--around", "2", "--along", "3"],
+            r"flat\.yaml:3: surfaces\[0\]: .*end point at infinity at segment 0, alpha = 0\.5")
+
+
+def test_ribbons_of_two_rulings(tmp_path):
+    """Two rulings only (along = 2): the fold scan once indexed a third."""
+    text = ("cgamesh: 1\nsurfaces:\n  - name: s\n    type: point_pairs\n    curve: linear\n    controls:\n"
+            "      - {a: [0.0, 0.0, 0.0], b: [1.0, 0.0, 0.0]}\n"
+            "      - {a: [1.3416407864998738, 0.0, 0.6708203932499369], b: [0.34164078649987384, 0.0, 0.6708203932499369]}\n")
+    assert_finite_unit(meshed(tmp_path, text, "--around", "2", "--along", "2"))

@@ -38,6 +38,9 @@ CLOSABLE_CURVES = ("kb", "catmull_rom")
 DEFAULT_AROUND = 64
 DEFAULT_ALONG = 128
 MAX_RESOLUTION = 1_000_000
+# Coordinates and radii: float32 (every output file's positions) reaches 3.4e38; the margin
+# leaves room for surfaces that bulge past their controls.
+MAX_LENGTH = 1e30
 MAX_WEIGHT_RATIO = 1e12  # largest / smallest rational Bezier weight of one surface
 NAME_PATTERN = "[A-Za-z_][A-Za-z0-9_]*"
 
@@ -314,14 +317,14 @@ def _circle(r: _Reader, node: yaml.Node, path: str, curve: str) -> CircleControl
                               f"got both")
         through = _through(r, entries["through"], f"{path}.through")
         return CircleControl(None, None, None, through, weight, r.location(node, path))
-    center = r.vector3(r.require(node, entries, "center", path, _CIRCLE_FORMS), f"{path}.center")
+    center = r.position(r.require(node, entries, "center", path, _CIRCLE_FORMS), f"{path}.center")
     normal_node = r.require(node, entries, "normal", path, _CIRCLE_FORMS)
     normal = r.vector3(normal_node, f"{path}.normal")
     if normal == (0.0, 0.0, 0.0):
         raise r.error(normal_node, f"{path}.normal", f"must be non-zero, got {_fmt(normal)}",
                       DegenerateGeometryError)
     radius_node = r.require(node, entries, "radius", path, _CIRCLE_FORMS)
-    radius = r.number(radius_node, f"{path}.radius")
+    radius = r.length(radius_node, f"{path}.radius")
     if radius <= 0.0:
         raise r.error(radius_node, f"{path}.radius", f"must be > 0, got {radius!r}",
                       DegenerateGeometryError)
@@ -333,7 +336,7 @@ def _through(r: _Reader, node: yaml.Node, path: str) -> tuple[Vec3, Vec3, Vec3]:
     items = r.sequence(node, path, "a list of 3 points [A, B, D]")
     if len(items) != 3:
         raise r.wrong(node, path, "a list of 3 points [A, B, D]")
-    a, b, d = points = tuple(r.vector3(item, f"{path}[{i}]") for i, item in enumerate(items))
+    a, b, d = points = tuple(r.position(item, f"{path}[{i}]") for i, item in enumerate(items))
     for i, j in ((0, 1), (0, 2), (1, 2)):
         if _coincident(points[i], points[j]):
             raise r.error(items[j], f"{path}[{j}]", f"must differ from through[{i}] = "
@@ -347,9 +350,9 @@ def _through(r: _Reader, node: yaml.Node, path: str) -> tuple[Vec3, Vec3, Vec3]:
 def _point_pair(r: _Reader, node: yaml.Node, path: str, curve: str) -> PointPairControl:
     entries = r.mapping(node, path, _POINT_PAIR_KEYS)
     weight = _weight(r, entries, path, curve)
-    a = r.vector3(r.require(node, entries, "a", path, "a point pair is {a, b}"), f"{path}.a")
+    a = r.position(r.require(node, entries, "a", path, "a point pair is {a, b}"), f"{path}.a")
     b_node = r.require(node, entries, "b", path, "a point pair is {a, b}")
-    b = r.vector3(b_node, f"{path}.b")
+    b = r.position(b_node, f"{path}.b")
     if _coincident(a, b):
         raise r.error(b_node, f"{path}.b", f"must differ from a = {_fmt(a)}, got {_fmt(b)}",
                       DegenerateGeometryError)
@@ -663,6 +666,22 @@ class _Reader:
         if type(value) is not int or not low <= value <= high:
             raise self.wrong(node, path, f"an integer from {low} to {high}")
         return value
+
+    def length(self, node: yaml.Node, path: str) -> float:
+        """A finite number of magnitude at most MAX_LENGTH (lengths and coordinates)."""
+        value = self.number(node, path)
+        if abs(value) > MAX_LENGTH:
+            raise self.error(node, path, f"must be within +-{MAX_LENGTH:g} (output files store float32), "
+                                         f"got {value!r}")
+        return value
+
+    def position(self, node: yaml.Node, path: str) -> Vec3:
+        """A point: 3 finite coordinates, each of magnitude at most MAX_LENGTH."""
+        items = self.sequence(node, path, "a list of 3 numbers")
+        if len(items) != 3:
+            raise self.wrong(node, path, "a list of 3 numbers")
+        x, y, z = (self.length(item, f"{path}[{i}]") for i, item in enumerate(items))
+        return x, y, z
 
     def vector3(self, node: yaml.Node, path: str) -> Vec3:
         """A list of exactly 3 finite numbers, as a tuple of floats."""
