@@ -247,3 +247,16 @@ def test_ribbons_of_two_rulings(tmp_path):
             "      - {a: [0.0, 0.0, 0.0], b: [1.0, 0.0, 0.0]}\n"
             "      - {a: [1.3416407864998738, 0.0, 0.6708203932499369], b: [0.34164078649987384, 0.0, 0.6708203932499369]}\n")
     assert_finite_unit(meshed(tmp_path, text, "--around", "2", "--along", "2"))
+
+
+def test_repeated_point_pairs(tmp_path):
+    """A linear ribbon with a repeated control meshes; one whose controls are all the same is refused."""
+    first, second = "{a: [0, 0, 0], b: [1, 0, 0]}", "{a: [0, 1, 0.5], b: [1, 1.2, 0]}"
+    head = "cgamesh: 1\nsurfaces:\n  - name: s\n    type: point_pairs\n    curve: linear\n    controls:\n"
+    meshes = meshed(tmp_path, head + "".join(f"      - {c}\n" for c in (first, second, second)),
+                    "--around", "3", "--along", "9")
+    assert_finite_unit(meshes)
+    assert degenerate_triangles(meshes[0]) == 0
+    path = tmp_path / "same.yaml"
+    path.write_text(head + f"      - {first}\n" * 2)
+    refused([path, "-o", tmp_path / "x.glb"], r"same\.yaml:3: .*every control is the same point pair")
