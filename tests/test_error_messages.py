@@ -260,3 +260,18 @@ def test_repeated_point_pairs(tmp_path):
     path = tmp_path / "same.yaml"
     path.write_text(head + f"      - {first}\n" * 2)
     refused([path, "-o", tmp_path / "x.glb"], r"same\.yaml:3: .*every control is the same point pair")
+
+
+def test_a_real_process_under_python_w_error(tmp_path):
+    """The command as a process with every warning an error: the -z tube meshes, a bad flag is one line."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "minus_z.yaml"
+    path.write_text(scene(["{center: [0, 0, 0], normal: [0, 0, -1], radius: 1}",
+                           "{center: [0, 0, 2], normal: [0, 0, -1], radius: 0.5}"]))
+    command = [sys.executable, "-W", "error", "-m", "cgamesh_cli.main", str(path), "-o", str(tmp_path / "t.glb")]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    done = subprocess.run(command + ["--around", "2"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and "--around" in done.stderr, done.stderr
