@@ -275,3 +275,15 @@ def test_a_real_process_under_python_w_error(tmp_path):
     assert done.returncode == 0 and done.stderr == "", done.stderr
     done = subprocess.run(command + ["--around", "2"], capture_output=True, text=True, timeout=120)
     assert done.returncode == 2 and done.stderr.count("\n") == 1 and "--around" in done.stderr, done.stderr
+
+
+def test_nearly_identical_controls_to_a_tolerance_give_no_degenerate_triangles(tmp_path):
+    near = "{center: [0, 0, 1.0e-9], normal: [0, 0, 1], radius: 1}"
+    path = tmp_path / "scene.yaml"
+    path.write_text(scene([RING, near, THIRD]))
+    status, out, err = run([path, "-o", tmp_path / "near.glb", "--tolerance", "1e-2"])
+    assert status == 0 and err == "", err
+    assert float(re.search(r"max deviation ([0-9.e+-]+),", out).group(1)) <= 1e-2
+    meshes = read_gltf(tmp_path / "near.glb", world=True)
+    assert_finite_unit(meshes)
+    assert degenerate_triangles(meshes[0]) == 0
