@@ -2,7 +2,8 @@
 
 Orientations drawn from the exact +-axes as often as from the sphere, every curve kind and
 object kind, caps / closed / align in every allowed combination, resolutions at their bounds,
-sizes and distances over many decades. Each scene either meshes (finite positions, unit normals
+sizes and distances over many decades, a control repeated exactly or 1e-9 of the size apart.
+Each scene either meshes (finite positions, unit normals
 orthogonal to their circle or ruling, the first ring on the first control and the last on the
 last) or is refused with one line naming the scene's file, line and surface; numpy warnings are
 errors. A second property writes every output format.
@@ -62,6 +63,18 @@ def scenes(draw):
         controls[-1] = controls[-1] + (line,)
         step = step + 0.5 * np.array(draw(sphere_direction))
         point = point + 1.5 * scale * step / max(np.linalg.norm(step), 1e-3)
+    repeat = draw(st.sampled_from((None, None, 0.0, 1e-9)))
+    if repeat is not None:  # the first control again, identical or 1e-9 of the size apart
+        shift = np.array([repeat * scale, 0.0, 0.0])
+        first = controls[0]
+        if kind == "circles":
+            line = first[-1].replace(f"center: {first[1].tolist()}", f"center: {(first[1] + shift).tolist()}")
+            copy = ("circle", first[1] + shift, first[2], first[3], line)
+        else:
+            line = (first[-1].replace(f"a: {first[1].tolist()}", f"a: {(first[1] + shift).tolist()}")
+                    .replace(f"b: {first[2].tolist()}", f"b: {(first[2] + shift).tolist()}"))
+            copy = ("pair", first[1] + shift, first[2] + shift, line)
+        controls.insert(1, copy)
     least_around = 3 if kind == "circles" else 2
     around = draw(st.sampled_from((least_around, least_around + 1, 7, 16)))
     along = draw(st.sampled_from((2, 3, 17, 40)))
