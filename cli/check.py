@@ -39,7 +39,8 @@ def run(args: argparse.Namespace):
         from cgamesh.pipeline import Resolution, mesh_scene
         from cgamesh.inputs.scene import load_scene
 
-        meshes = [mesh for mesh, _ in mesh_scene(load_scene(path, rendering=False), Resolution(args.around, args.along))]
+        scene = load_scene(path, rendering=False)  # the rendering keys are render's and verify's
+        meshes = [mesh for mesh, _ in mesh_scene(scene, Resolution(args.around, args.along))]
     else:
         meshes = load_meshes(path)
     limits = Thresholds(max_aspect_ratio=args.max_aspect, min_angle_degrees=args.min_angle,
