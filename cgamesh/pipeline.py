@@ -14,6 +14,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
 from cgamesh import budget as costs
 
 from cgamesh.meshing import uv as uv_map
@@ -27,6 +29,9 @@ from cgamesh.inputs.scene import Scene, SurfaceSpec
 from cgamesh.meshing.tessellation import mesh_to_tolerance, ribbon_to_tolerance
 from cgamesh.meshing.tolerance_budget import estimate as tolerance_estimate
 from cgamesh.meshing.tolerance_budget import TOLERANCE_FLOOR, tolerance_floor
+
+
+FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 @dataclass(frozen=True)
@@ -117,7 +122,7 @@ def mesh_planned(plan: SurfacePlan, tangents: bool) -> SurfaceMesh:
         if tolerance is not None:
             return mesh_to_tolerance(surface, tolerance, caps=spec.caps, closed=spec.closed, tangents=tangents)
         return mesh_circle_surface(surface, around, along, caps=spec.caps, closed=spec.closed,
-                                   with_tangents=tangents)
+                                   with_tangents=tangents, distinct=True)
     except CgameshError as error:
         raise type(error)(f"{spec.location}: {error}") from None
 
@@ -136,6 +141,17 @@ def _tolerance(spec: SurfaceSpec, resolution: Resolution) -> float | None:
             "--along to override it with a resolution"
         )
     return spec.tolerance
+
+
+def _check_uv_scale(mesh: SurfaceMesh, spec: SurfaceSpec) -> None:
+    """Refuse a ``uv_scale`` so small that texture coordinates would leave float32's range
+    (every output stores them in float32, and they would be written as infinities)."""
+    if spec.uv != "natural" or spec.uv_scale is None:
+        return
+    least = uv_map.natural_extent(mesh) / FLOAT32_MAX
+    if spec.uv_scale < least:
+        raise InvalidInputError(f"{spec.location}.uv_scale must be at least {least:.3g} for this surface "
+                                f"(its texture coordinates would overflow float32), got {spec.uv_scale!r}")
 
 
 def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lambda label: None,
@@ -163,5 +179,7 @@ def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lam
     for plan in plans:
         meshes.append(mesh_planned(plan, tangents))
         progress(plan.spec.name)
+    for mesh, spec in zip(meshes, scene.surfaces):
+        _check_uv_scale(mesh, spec)
     meshes = uv_map.apply_uv_modes(meshes, [(spec.uv, spec.uv_scale) for spec in scene.surfaces])
     return [(mesh, spec.material) for mesh, spec in zip(meshes, scene.surfaces)]

@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> str:
         raise InvalidInputError("--tolerance cannot be combined with --around or --along")
     check_distinct(outputs, args.report, args.scene)
     start = time.perf_counter()
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, rendering=False)  # the rendering keys are render's and verify's
     with Progress(len(scene.surfaces), enabled=not args.quiet) as progress:
         meshes = mesh_scene(scene, Resolution(args.around, args.along, args.tolerance), progress=progress.advance,
                             tangents=args.tangents, max_memory=args.max_memory, outputs=args.output)

@@ -40,8 +40,8 @@ def run(args: argparse.Namespace):
         from cgamesh.pipeline import Resolution, mesh_scene
         from cgamesh.inputs.scene import load_scene
 
-        meshes = [mesh for mesh, _ in mesh_scene(load_scene(path), Resolution(args.around, args.along),
-                                                  max_memory=args.max_memory)]
+        scene = load_scene(path, rendering=False)  # the rendering keys are render's and verify's
+        meshes = [mesh for mesh, _ in mesh_scene(scene, Resolution(args.around, args.along), max_memory=args.max_memory)]
     else:
         meshes = load_meshes(path)
     limits = Thresholds(max_aspect_ratio=args.max_aspect, min_angle_degrees=args.min_angle,

@@ -44,12 +44,17 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(argv: list[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    if argv == ["--version"]:
+        print(f"cgamesh {_version()}")
+        return 0
     name = argv[0] if argv and argv[0] in SUBCOMMANDS else None
     module = importlib.import_module(f"cgamesh_cli.{SUBCOMMANDS[name]}" if name else "cgamesh_cli.build")
-    args = module.build_parser().parse_args(argv[1:] if name else argv)
+    parser = module.build_parser()
+    parser.error = _refuse_usage(parser.prog)  # argparse's own prints the whole usage: one line, as every error
     try:
+        args = parser.parse_args(argv[1:] if name else argv)
         result = module.run(args)
-    except CgameshError as error:
+    except (CgameshError, _UsageError) as error:
         print(f"cgamesh: error: {error}", file=sys.stderr)
         return EXIT_USER_ERROR
     if isinstance(result, int):
@@ -57,6 +62,26 @@ def _main(argv: list[str] | None) -> int:
     if result and not getattr(args, "quiet", False):
         print(result)
     return 0
+
+
+class _UsageError(Exception):
+    """A command line argparse refuses (unknown flag, bad value); exit status 2 like other mistakes."""
+
+
+def _refuse_usage(prog: str):
+    def refuse(message: str):
+        raise _UsageError(f"{message} (see {prog} --help)")
+
+    return refuse
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("cgamesh")
+    except PackageNotFoundError:  # run from a source tree that is not installed
+        return "unknown"
 
 
 if __name__ == "__main__":

@@ -211,10 +211,17 @@ def test_sample_refuses_where_the_projection_vanishes():
 
 
 def test_alignment_removes_the_opposite_orientation():
-    surface = build_surface(parse_scene(OPPOSITE.replace("align: false", "align: true"), "o.yaml").surfaces[0])
+    """Aligned, the two controls are one circle: a surface of no area, refused with its place."""
+    with pytest.raises(DegenerateGeometryError, match=r"o\.yaml:3: surfaces\[0\]\.controls: every control is the same"):
+        build_surface(parse_scene(OPPOSITE.replace("align: false", "align: true"), "o.yaml").surfaces[0])
+    # A larger second circle of the opposite orientation: aligned, the interpolation exists.
+    text = OPPOSITE.replace("align: false", "align: true").replace("normal: [0, 0, -1], radius: 1.0",
+                                                                   "normal: [0, 0, -1], radius: 2.0")
+    surface = build_surface(parse_scene(text, "o.yaml").surfaces[0])
     surface.check_projection_exists()
     blades = surface.sample(np.linspace(0.0, 1.0, 11)).blades
-    assert np.all(np.isfinite(blades)) and _close(blades, np.broadcast_to(surface.controls[0], blades.shape))
+    assert np.all(np.isfinite(blades))
+    assert _close(blades[[0, -1]], surface.controls)
 
 
 def test_margin_is_one_at_blade_controls():

@@ -141,9 +141,17 @@ def test_numbers_however_written(written, value):
 
 @given(st.floats(allow_nan=False, allow_infinity=False))
 def test_every_finite_float_repr_round_trips(x):
-    (s,) = parse_scene(_edit(BASE, "center: [0, 0, 0]", f"center: [0, {x!r}, 0]")).surfaces
-    assert s.controls[0].center[1] == x and math.copysign(1, s.controls[0].center[1]) == \
+    """Read where any finite number is allowed: a normal's component (its z is 1, so never zero)."""
+    (s,) = parse_scene(_edit(BASE, "normal: [0, 0, 1], radius: 1.0", f"normal: [0, {x!r}, 1], radius: 1.0")).surfaces
+    assert s.controls[0].normal[1] == x and math.copysign(1, s.controls[0].normal[1]) == \
         math.copysign(1, x)
+
+
+@pytest.mark.parametrize("value", ["1.0000000000000002e+30", "-1e300", "1.7976931348623157e308"])
+def test_coordinates_beyond_float32_outputs_are_refused(value):
+    with pytest.raises(SceneFileError, match=r"<string>:7: surfaces\[0\]\.controls\[0\]\.center\[1\] must be "
+                                             r"within \+-1e\+30"):
+        parse_scene(_edit(BASE, "center: [0, 0, 0]", f"center: [0, {value}, 0]"))
 
 
 @pytest.mark.parametrize("word", ["yes", "no", "on", "off", "y", "n"])

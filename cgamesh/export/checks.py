@@ -79,6 +79,10 @@ def check_values(mesh: SurfaceMesh, path) -> Measured:
         bounds[name] = column_bounds(np.asarray(getattr(mesh, name), dtype=np.float64))
         if not np.isfinite(bounds[name]).all():
             raise ExportError(f"{where}: {name} contain NaN or infinity")
+        # Files store them in float32 (PLY, STL, USD): beyond its range they would be infinities.
+        if np.abs(bounds[name]).max() > FLOAT32_MAX:
+            raise ExportError(f"{where}: {name} exceed float32's range (largest "
+                              f"{np.abs(bounds[name]).max():.3g}); no output can store them")
     return Measured(bounds["positions"], normal_lengths(mesh, path))
 
 

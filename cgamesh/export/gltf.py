@@ -47,7 +47,7 @@ import pygltflib as g
 
 from cgamesh.errors import ExportError
 from cgamesh.export.atomic import atomic_files, atomic_write
-from cgamesh.export.checks import (check_arguments, check_channels, check_material, check_shapes,
+from cgamesh.export.checks import (FLOAT32_MAX, check_arguments, check_channels, check_material, check_shapes,
                                    column_bounds, normal_lengths)
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
@@ -266,6 +266,8 @@ def _fill_mesh(doc, blob, offset, mesh, layout, up, scale, path) -> g.Node:
     if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
         raise ExportError(f"{where}: positions contain NaN or infinity")
     centre = 0.5 * (lo + hi)
+    if not (np.isfinite(centre * factor).all() and 0.5 * float(np.max(hi - lo)) * scale <= FLOAT32_MAX):
+        raise ExportError(f"{where}: positions exceed float32's range after scaling by {scale}")
     node = g.Node(name=mesh.name, mesh=len(doc.meshes), translation=(centre[perm] * factor).tolist())
     if layout.quantize:
         half = float(np.max(hi - lo)) * 0.5 * scale
@@ -300,6 +302,8 @@ def _fill_mesh(doc, blob, offset, mesh, layout, up, scale, path) -> g.Node:
         np.rint(uvs[:, 0] * 65535.0, out=uv_out[:, 0], casting="unsafe")
         np.rint((1.0 - uvs[:, 1]) * 65535.0, out=uv_out[:, 1], casting="unsafe")
     else:
+        if np.abs(column_bounds(uvs)).max() > FLOAT32_MAX - 1.0:  # 1 - v too
+            raise ExportError(f"{where}: uvs exceed float32's range")
         uv_out[:, 0] = uvs[:, 0]
         np.subtract(1.0, uvs[:, 1], out=uv_out[:, 1], casting="same_kind")
     accessor("TEXCOORD_0")

@@ -12,12 +12,15 @@ from cgamesh.geometry import objects
 from cgamesh.geometry.curves.bezier import Bezier, RationalBezier
 from cgamesh.geometry.curves.kochanek_bartels import KochanekBartels
 from cgamesh.geometry.curves.linear import Linear
-from cgamesh.errors import CgameshError, InvalidInputError
+from cgamesh.errors import CgameshError, DegenerateGeometryError, InvalidInputError
 from cgamesh.geometry.frame import LocalFrame
 from cgamesh.geometry.motor_surface import MotorSurface
 from cgamesh.geometry.motors import MotionSpline
 from cgamesh.inputs.scene import SurfaceSpec
 from cgamesh.geometry.surface import EvolvedSurface
+
+# Consecutive normalised control blades closer than this (relative) are the same object.
+SAME_CONTROL_RTOL = 1e-12
 
 
 def make_curve(spec: SurfaceSpec):
@@ -41,12 +44,32 @@ def _circle_points(spec: SurfaceSpec) -> tuple[np.ndarray, np.ndarray]:
     points, reach = [], []
     for control in spec.controls:
         if control.through is not None:
-            points.extend(control.through)
-            reach.extend([0.0, 0.0, 0.0])
+            # The circle may reach far past its three points (when they are nearly on one line):
+            # its own centre and radius go into the frame, so the whole circle fits the unit ball.
+            centre, _, radius = circumcircle(control.through)
+            points.extend([*control.through, centre])
+            reach.extend([0.0, 0.0, 0.0, radius])
         else:
             points.append(control.center)
             reach.append(control.radius)
     return np.array(points, dtype=np.float64), np.array(reach)
+
+
+def circumcircle(through) -> tuple[np.ndarray, np.ndarray, float]:
+    """Centre (3,), unit normal (3,) and radius of the circle through three non-collinear points
+    A, B, D, the normal oriented so that A -> B -> D runs counter-clockwise about it.
+
+    centre = A + ((|u|^2 v - |v|^2 u) x (u x v)) / (2 |u x v|^2) for u = B - A, v = D - A, on the
+    points divided by their spread (nothing overflows or underflows). Its relative error is about
+    float64's epsilon over the sine of the triangle's angle at A, where A ^ B ^ D computed from
+    up(A), up(B), up(D) loses precision with the square of that sine's inverse.
+    """
+    a, b, d = (np.array(p, dtype=np.float64) for p in through)
+    spread = max(float(np.abs(b - a).max()), float(np.abs(d - a).max()))
+    u, v = (b - a) / spread, (d - a) / spread
+    normal = np.cross(u, v)
+    offset = np.cross(np.dot(u, u) * v - np.dot(v, v) * u, normal) / (2.0 * np.dot(normal, normal))
+    return a + spread * offset, normal / np.linalg.norm(normal), spread * float(np.linalg.norm(offset))
 
 
 def build_surface(spec: SurfaceSpec) -> EvolvedSurface | MotorSurface:
@@ -70,13 +93,33 @@ def build_surface(spec: SurfaceSpec) -> EvolvedSurface | MotorSurface:
         raise type(error)(f"{spec.location}: {error}") from None
     if spec.align:
         blades = objects.align_orientations(blades, grade)
-    return EvolvedSurface(spec.name, grade, blades, make_curve(spec), frame)
+    curve = make_curve(spec)
+    same = _same_as_previous(blades)
+    if same.all():
+        kind = "circle" if grade == objects.CIRCLE_GRADE else "point pair"
+        raise DegenerateGeometryError(f"{spec.location}.controls: every control is the same {kind}, "
+                                      "so the surface has no area")
+    if spec.curve == "linear" and same.any():
+        # A linear segment between two equal controls is that one object: dropping the repeat
+        # leaves the same surface, and no ring of the mesh is spent on a segment of no area.
+        blades = blades[np.concatenate([[True], ~same])]
+        curve = Linear(len(blades))
+    return EvolvedSurface(spec.name, grade, blades, curve, frame)
+
+
+def _same_as_previous(blades: np.ndarray) -> np.ndarray:
+    """(n - 1,) bool: control i + 1 equals control i to rounding (normalised blades (n, 32))."""
+    size = np.maximum(np.abs(blades[1:]).max(axis=1), np.abs(blades[:-1]).max(axis=1))
+    return np.abs(blades[1:] - blades[:-1]).max(axis=1) <= SAME_CONTROL_RTOL * size
 
 
 def _circle_blade(control, frame: LocalFrame) -> np.ndarray:
     if control.through is not None:
-        a, b, d = (frame.to_local(np.array(p, dtype=np.float64)) for p in control.through)
-        return objects.circle_through(a, b, d)
+        # The same circle and orientation as up(A) ^ up(B) ^ up(D) (the scene format's
+        # definition), built from its centre, normal and radius: accurate for any three points
+        # the scene loader accepts, nearly collinear ones included.
+        centre, normal, radius = circumcircle(control.through)
+        return objects.circle_from_center_normal_radius(frame.to_local(centre), normal, radius / frame.scale)
     return objects.circle_from_center_normal_radius(
         frame.to_local(np.array(control.center, dtype=np.float64)),
         np.array(control.normal, dtype=np.float64),

@@ -38,7 +38,10 @@ def circle_from_center_normal_radius(center, normal, radius) -> np.ndarray:
     center = np.asarray(center, dtype=np.float64)
     normal = np.asarray(normal, dtype=np.float64)
     radius = np.asarray(radius, dtype=np.float64)[..., None]
-    n = normal / np.linalg.norm(normal, axis=-1, keepdims=True)
+    # A normal is a direction: divided by its largest component first, any finite non-zero one
+    # (1e-300 or 1e300 long) has a length that neither underflows nor overflows.
+    n = normal / np.abs(normal).max(axis=-1, keepdims=True)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
     u = perpendicular_unit(n)
     v = np.cross(n, u)  # (u, v, n) right-handed: u -> v is counter-clockwise about n
     return circle_through(center + radius * u, center + radius * v, center - radius * u)

@@ -21,7 +21,7 @@ from cgamesh.geometry.algebra.layout import grade_indices
 from cgamesh.geometry.curves import CurveBasis
 from cgamesh.errors import DegenerateGeometryError
 from cgamesh.geometry.frame import LocalFrame
-from cgamesh.geometry.objects import circle_euclidean
+from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
 from cgamesh.geometry.projection import Projection, four_vector_free, margin, project, project_scalar
 
 # The projection is refused where min(beta, g) falls below this fraction of |C'|^2: there
@@ -69,7 +69,24 @@ class EvolvedSurface:
         t = np.asarray(t, dtype=np.float64)
         projection = self._project(t)
         self._refuse_small_margin(t, projection.margin)
+        if self.grade == 2:
+            self._refuse_ends_at_infinity(t, projection.blades)
         return projection
+
+    def _refuse_ends_at_infinity(self, t: np.ndarray, pairs: np.ndarray) -> None:
+        """A projected point pair can be real and still have an end point at infinity (the
+        interpolant of two parallel, translated segments can be a flat point there)."""
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            a, b = point_pair_endpoints(pairs)
+        bad = ~(np.isfinite(a).all(axis=-1) & np.isfinite(b).all(axis=-1))
+        if not bad.any():
+            return
+        worst = int(np.argmax(bad))
+        segment = min(int(t[worst]), self.segment_count - 1)
+        raise DegenerateGeometryError(
+            f"surface '{self.name}': the interpolated point pair has an end point at infinity at "
+            f"segment {segment}, alpha = {t[worst] - segment:.6g} (the ribbon is unbounded there)"
+        )
 
     def check_projection_exists(self, sampled: np.ndarray | None = None) -> None:
         """Scan the whole curve densely and raise where the projection vanishes.

@@ -17,7 +17,7 @@ import difflib
 import math
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import yaml
 
@@ -38,6 +38,10 @@ CLOSABLE_CURVES = ("kb", "catmull_rom")
 DEFAULT_AROUND = 64
 DEFAULT_ALONG = 128
 MAX_RESOLUTION = 1_000_000
+# Coordinates and radii: float32 (every output file's positions) reaches 3.4e38; the margin
+# leaves room for surfaces that bulge past their controls.
+MAX_LENGTH = 1e30
+MAX_WEIGHT_RATIO = 1e12  # largest / smallest rational Bezier weight of one surface
 NAME_PATTERN = "[A-Za-z_][A-Za-z0-9_]*"
 
 _TOP_KEYS = ("cgamesh", "units", "up", "surfaces") + RENDERING_KEYS
@@ -150,8 +154,12 @@ class Scene:
     attenuation: Attenuation = Attenuation()
 
 
-def load_scene(path: str | os.PathLike) -> Scene:
-    """Read and validate the scene file at ``path`` (UTF-8, an optional BOM allowed)."""
+def load_scene(path: str | os.PathLike, rendering: bool = True) -> Scene:
+    """Read and validate the scene file at ``path`` (UTF-8, an optional BOM allowed).
+
+    ``rendering``: also read the rendering keys (camera, lights, objects, ...); meshing leaves
+    them unread, so a mistake there stops only the commands that render.
+    """
     file = os.fsdecode(path)
     try:
         with open(file, encoding="utf-8-sig") as stream:
@@ -159,14 +167,17 @@ def load_scene(path: str | os.PathLike) -> Scene:
     except OSError as exc:
         raise SceneFileError(f"{file}: cannot read the scene file: {exc.strerror or exc}") from exc
     except UnicodeDecodeError as exc:
+        line = exc.object.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (exc.object.rfind(b"\n", 0, exc.start) + 1) + 1
         raise SceneFileError(
-            f"{file}: the scene file must be UTF-8 text, got byte 0x{exc.object[exc.start]:02x} "
-            f"at offset {exc.start}") from exc
-    return parse_scene(text, file)
+            f"{file}:{line}: the scene file must be UTF-8 text, got byte 0x{exc.object[exc.start]:02x} "
+            f"in column {column}") from exc
+    return parse_scene(text, file, rendering)
 
 
-def parse_scene(text: str, path: str = "<string>") -> Scene:
-    """Validate scene-file ``text``; ``path`` only names the file in error messages."""
+def parse_scene(text: str, path: str = "<string>", rendering: bool = True) -> Scene:
+    """Validate scene-file ``text``; ``path`` only names the file in error messages;
+    ``rendering`` as for ``load_scene``."""
     root = _compose(text, path)
     r = _Reader(path)
     if root is None:
@@ -190,10 +201,12 @@ def parse_scene(text: str, path: str = "<string>") -> Scene:
     names_taken: dict[str, Location] = {}
     surfaces = tuple(_surface(r, item, f"surfaces[{i}]", names_taken)
                      for i, item in enumerate(items))
-    rendering = parse_rendering(r, entries, up)
-    return Scene(path, version, units, METERS_PER_UNIT[units], up, surfaces, rendering.camera,
-                 rendering.lights, rendering.objects, rendering.background, rendering.max_depth,
-                 rendering.attenuation)
+    scene = Scene(path, version, units, METERS_PER_UNIT[units], up, surfaces)
+    if not rendering:
+        return scene
+    keys = parse_rendering(r, entries, up)
+    return replace(scene, camera=keys.camera, lights=keys.lights, objects=keys.objects,
+                   background=keys.background, max_depth=keys.max_depth, attenuation=keys.attenuation)
 
 
 # --- sections ----------------------------------------------------------------------------------
@@ -277,7 +290,15 @@ def _controls(r: _Reader, node: yaml.Node, path: str, kind: str, curve: str,
     if len(items) < minimum:
         raise r.wrong(node, path, expected)
     read = _circle if kind == "circles" else _point_pair
-    return tuple(read(r, item, f"{path}[{i}]", curve) for i, item in enumerate(items))
+    controls = tuple(read(r, item, f"{path}[{i}]", curve) for i, item in enumerate(items))
+    largest = max(control.weight for control in controls)
+    for control in controls:
+        # Only the ratios of weights matter; a control weighing 1e-12 of another is absent
+        # except at its own end, where the curve would jump.
+        if control.weight * MAX_WEIGHT_RATIO < largest:
+            raise SceneFileError(f"{control.location}.weight must be at least {1.0 / MAX_WEIGHT_RATIO:g} "
+                                 f"times the largest weight ({largest!r}), got {control.weight!r}")
+    return controls
 
 
 def _weight(r: _Reader, entries: dict, path: str, curve: str) -> float:
@@ -305,14 +326,14 @@ def _circle(r: _Reader, node: yaml.Node, path: str, curve: str) -> CircleControl
                               f"got both")
         through = _through(r, entries["through"], f"{path}.through")
         return CircleControl(None, None, None, through, weight, r.location(node, path))
-    center = r.vector3(r.require(node, entries, "center", path, _CIRCLE_FORMS), f"{path}.center")
+    center = r.position(r.require(node, entries, "center", path, _CIRCLE_FORMS), f"{path}.center")
     normal_node = r.require(node, entries, "normal", path, _CIRCLE_FORMS)
     normal = r.vector3(normal_node, f"{path}.normal")
     if normal == (0.0, 0.0, 0.0):
         raise r.error(normal_node, f"{path}.normal", f"must be non-zero, got {_fmt(normal)}",
                       DegenerateGeometryError)
     radius_node = r.require(node, entries, "radius", path, _CIRCLE_FORMS)
-    radius = r.number(radius_node, f"{path}.radius")
+    radius = r.length(radius_node, f"{path}.radius")
     if radius <= 0.0:
         raise r.error(radius_node, f"{path}.radius", f"must be > 0, got {radius!r}",
                       DegenerateGeometryError)
@@ -324,7 +345,7 @@ def _through(r: _Reader, node: yaml.Node, path: str) -> tuple[Vec3, Vec3, Vec3]:
     items = r.sequence(node, path, "a list of 3 points [A, B, D]")
     if len(items) != 3:
         raise r.wrong(node, path, "a list of 3 points [A, B, D]")
-    a, b, d = points = tuple(r.vector3(item, f"{path}[{i}]") for i, item in enumerate(items))
+    a, b, d = points = tuple(r.position(item, f"{path}[{i}]") for i, item in enumerate(items))
     for i, j in ((0, 1), (0, 2), (1, 2)):
         if _coincident(points[i], points[j]):
             raise r.error(items[j], f"{path}[{j}]", f"must differ from through[{i}] = "
@@ -338,9 +359,9 @@ def _through(r: _Reader, node: yaml.Node, path: str) -> tuple[Vec3, Vec3, Vec3]:
 def _point_pair(r: _Reader, node: yaml.Node, path: str, curve: str) -> PointPairControl:
     entries = r.mapping(node, path, _POINT_PAIR_KEYS)
     weight = _weight(r, entries, path, curve)
-    a = r.vector3(r.require(node, entries, "a", path, "a point pair is {a, b}"), f"{path}.a")
+    a = r.position(r.require(node, entries, "a", path, "a point pair is {a, b}"), f"{path}.a")
     b_node = r.require(node, entries, "b", path, "a point pair is {a, b}")
-    b = r.vector3(b_node, f"{path}.b")
+    b = r.position(b_node, f"{path}.b")
     if _coincident(a, b):
         raise r.error(b_node, f"{path}.b", f"must differ from a = {_fmt(a)}, got {_fmt(b)}",
                       DegenerateGeometryError)
@@ -441,6 +462,20 @@ class _CoreLoader(yaml.SafeLoader):
     yaml_implicit_resolvers = {None: [(tag, _CORE_PATTERNS[tag])
                                       for tag in (_NULL, _BOOL, _INT, _FLOAT)]}
 
+    def scan_to_next_token(self) -> None:
+        """PyYAML's, also skipping tabs between tokens of a line (YAML 1.2's s-separate-in-line:
+        ``[1,<tab>2]`` is valid). A tab in a block line's indentation is still refused."""
+        while True:
+            super().scan_to_next_token()
+            if self.peek() != "\t" or not self._within_line():
+                return
+            while self.peek() in " \t":
+                self.forward()
+
+    def _within_line(self) -> bool:
+        """In a flow collection, or past the indentation of the current line."""
+        return self.flow_level > 0 or self.buffer[self.pointer - self.column:self.pointer].strip(" ") != ""
+
 
 def _compose(text: str, file: str) -> yaml.Node | None:
     """The document's node tree (None if empty); YAML errors become one-line SceneFileErrors."""
@@ -460,7 +495,25 @@ def _compose(text: str, file: str) -> yaml.Node | None:
         raise SceneFileError(f"{file}:{line}: invalid YAML: character #x{exc.character:04x} is "
                              f"not allowed ({exc.reason})") from exc
     except RecursionError as exc:
-        raise SceneFileError(f"{file}: invalid YAML: nested too deeply") from exc
+        depth, line = _deepest(text)
+        raise SceneFileError(f"{file}:{line}: invalid YAML: nested too deeply ({depth} levels of "
+                             "lists and mappings)") from exc
+
+
+def _deepest(text: str) -> tuple[int, int]:
+    """(greatest nesting depth, 1-based line where it is first reached) of a YAML text, from its
+    parse events: the parser keeps an explicit stack, so this works where composing the node
+    tree (recursive) runs out of stack."""
+    depth = deepest = 0
+    line = 1
+    for event in yaml.parse(text, Loader=_CoreLoader):
+        if isinstance(event, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
+            depth += 1
+            if depth > deepest:
+                deepest, line = depth, event.start_mark.line + 1
+        elif isinstance(event, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
+            depth -= 1
+    return deepest, line
 
 
 def _core_value(node: yaml.ScalarNode) -> object:
@@ -622,6 +675,22 @@ class _Reader:
         if type(value) is not int or not low <= value <= high:
             raise self.wrong(node, path, f"an integer from {low} to {high}")
         return value
+
+    def length(self, node: yaml.Node, path: str) -> float:
+        """A finite number of magnitude at most MAX_LENGTH (lengths and coordinates)."""
+        value = self.number(node, path)
+        if abs(value) > MAX_LENGTH:
+            raise self.error(node, path, f"must be within +-{MAX_LENGTH:g} (output files store float32), "
+                                         f"got {value!r}")
+        return value
+
+    def position(self, node: yaml.Node, path: str) -> Vec3:
+        """A point: 3 finite coordinates, each of magnitude at most MAX_LENGTH."""
+        items = self.sequence(node, path, "a list of 3 numbers")
+        if len(items) != 3:
+            raise self.wrong(node, path, "a list of 3 numbers")
+        x, y, z = (self.length(item, f"{path}[{i}]") for i, item in enumerate(items))
+        return x, y, z
 
     def vector3(self, node: yaml.Node, path: str) -> Vec3:
         """A list of exactly 3 finite numbers, as a tuple of floats."""

@@ -126,7 +126,10 @@ def _nonzero(r, node, path: str) -> Vec3:
     value = r.vector3(node, path)
     if not any(value):
         raise r.error(node, path, f"must be non-zero, got {_fmt(value)}", DegenerateGeometryError)
-    return value
+    # A direction: over its largest component, so a length of 1e-300 or 1e300 cannot underflow
+    # or overflow where it is normalised.
+    largest = max(abs(c) for c in value)
+    return tuple(c / largest for c in value)
 
 
 def _positive(r, node, path: str) -> float:

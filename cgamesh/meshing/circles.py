@@ -24,6 +24,7 @@ import numpy as np
 from cgamesh.meshing import normals as normal_field
 from cgamesh.meshing import uv as uv_map
 from cgamesh.geometry.algebra import rotors
+from cgamesh.errors import DegenerateGeometryError
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.geometry.surface import CircleRings, EvolvedSurface
 
@@ -41,6 +42,9 @@ FOLD_AGREEMENT = 0.9
 # The seven-sample estimate of the outward sum decides its sign when the mean |cosine| between
 # normals and radial directions is at least this.
 OUTWARD_TRUST = 0.25
+# Consecutive rings whose vertices all lie within this fraction of the surface's size of each
+# other are one ring (float32, as output files store positions, resolves about 6e-8).
+DISTINCT_RING_FRACTION = 1e-6
 
 
 def transported_frames(normal: np.ndarray, closed: bool, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -70,7 +74,8 @@ class RingNormals:
     """The normal field of each ring as trigonometric polynomials in theta.
 
     frame: (K, 7, 2) coefficients of (zeta, rho); raw: (K, 7, 3) coefficients of N in world
-    axes; speed: (K,) the ring's largest velocity; samples: (K, 7, 3) points at the sample
+    axes; speed: (K,) the ring's largest velocity (in the surface's working units, world / frame
+    scale); samples: (K, 7, 3) points at the sample
     angles; sample_normals: (K, 7, 3) N there.
     """
 
@@ -83,7 +88,9 @@ class RingNormals:
     @classmethod
     def of(cls, rings: CircleRings, u: np.ndarray, v: np.ndarray) -> "RingNormals":
         points, radial = normal_field.sample_points(rings.centre, rings.radius, u, v)
-        velocity = rings.velocity(points)
+        # In the surface's working units (world / frame scale): a tube 1e-300 or 1e300 across
+        # has normals whose squared lengths neither underflow nor overflow.
+        velocity = rings.velocity(points) / rings.frame.scale
         zeta_rho = normal_field.frame_coordinates(velocity, radial, rings.normal)
         sampled = normal_field.normal_samples(zeta_rho, radial, rings.normal)
         speed = np.linalg.norm(velocity, axis=-1).max(axis=1)
@@ -117,7 +124,7 @@ def _ring_normals(surface: EvolvedSurface, t: np.ndarray, rings: CircleRings, u:
                   v: np.ndarray) -> RingNormals:
     """Normals of every ring; a ring that does not move takes the field from just past it."""
     field = RingNormals.of(rings, u, v)
-    stationary = field.speed <= STATIONARY_FRACTION * rings.radius
+    stationary = field.speed <= STATIONARY_FRACTION * rings.radius / rings.frame.scale  # both in working units
     if not np.any(stationary):
         return field
     nearby = _nearby_normals(surface, _step_inside(surface, t[stationary], 1.0), u[stationary])
@@ -291,18 +298,26 @@ def drop_zero_area(positions: np.ndarray, faces: np.ndarray, suspects: np.ndarra
 
 def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None = None, caps: bool = False,
                         closed: bool = False, t: np.ndarray | None = None,
-                        with_tangents: bool = False) -> SurfaceMesh:
+                        with_tangents: bool = False, distinct: bool = False) -> SurfaceMesh:
     """Triangulate an evolved circle surface on rings of ``around`` vertices.
 
     The rings sit at the increasing parameters ``t`` (from 0 to the segment count), or at
     ``along`` evenly spaced ones. Each ring carries around + 1 vertices (the UV seam column
     repeats the first one). ``with_tangents``: also the analytic tangents (for normal maps).
+    ``distinct``: leave out rings that would coincide with the ring before in an output file
+    (``distinct_rings``), as every mesh that is written should.
     """
     if t is None:
         t = np.linspace(0.0, surface.segment_count, along)
     surface.check_projection_exists(sampled=t)
-    along = len(t)
     rings = CircleRings.from_projection(surface.sample(t), surface.frame)
+    keep = distinct_rings(rings.centre, rings.normal, rings.radius, surface.frame.scale, surface.name) \
+        if distinct else np.ones(len(t), dtype=bool)
+    if not keep.all():
+        t = t[keep]
+        rings = CircleRings(rings.centre[keep], rings.normal[keep], rings.radius[keep], rings.omega[keep],
+                            rings.frame)
+    along = len(t)
     u, v = transported_frames(rings.normal, closed, t)
     field = _ring_normals(surface, t, rings, u, v)
 
@@ -365,6 +380,42 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
         positions, normals, uvs, faces, tangents, uv_lengths, weld = parts
     return SurfaceMesh(name=surface.name, positions=positions, normals=normals, uvs=uvs, faces=faces,
                        tangents=tangents, uv_lengths=uv_lengths, weld=weld)
+
+
+def distinct_rings(centre: np.ndarray, normal: np.ndarray, radius: np.ndarray, size: float,
+                   name: str) -> np.ndarray:
+    """Which rings (K,) bool to mesh: each kept ring lies more than DISTINCT_RING_FRACTION of the
+    surface's size along the surface from the ring kept before it; the first and the last are kept.
+
+    Rings closer than that (along a segment between nearly identical controls) would give
+    triangles of no area once positions are rounded to float32 in an output file. Distance
+    along is the running sum of a bound on how far any vertex moves between consecutive rings,
+    |dc| + |dr| + r |dn|, which never underestimates, so where rings are apart (the usual case)
+    every one is kept. Elsewhere the first ring of each stretch of that length is kept, and one
+    that follows the previous kept ring too closely (two stretches' first rings can straddle
+    their boundary) gives way. Where the last ring is too near the ring kept before it, that
+    one gives way instead (the surface's end stays where it is).
+    """
+    centre, radius = centre / size, radius / size  # relative: no length of 1e-300 underflows
+    step = (np.linalg.norm(np.diff(centre, axis=0), axis=1) + np.abs(np.diff(radius))
+            + np.maximum(radius[1:], radius[:-1]) * np.linalg.norm(np.diff(normal, axis=0), axis=1))
+    if np.all(step > DISTINCT_RING_FRACTION):
+        return np.ones(len(centre), dtype=bool)
+    along = np.concatenate([[0.0], np.cumsum(step)])
+    if along[-1] <= DISTINCT_RING_FRACTION:
+        raise DegenerateGeometryError(
+            f"surface '{name}': every circle of the surface lies within {DISTINCT_RING_FRACTION:g} of its "
+            "size of the first, so it has no area to mesh")
+    stretch = np.floor(along / DISTINCT_RING_FRACTION)
+    first = np.flatnonzero(np.concatenate([[True], stretch[1:] > stretch[:-1]]))
+    first = first[np.concatenate([[True], np.diff(along[first]) > DISTINCT_RING_FRACTION])]
+    if first[-1] != len(along) - 1:
+        if along[-1] - along[first[-1]] <= DISTINCT_RING_FRACTION and len(first) > 1:
+            first = first[:-1]
+        first = np.append(first, len(along) - 1)
+    keep = np.zeros(len(along), dtype=bool)
+    keep[first] = True
+    return keep
 
 
 def _grid_weld(along: int, around: int, closed: bool) -> np.ndarray:

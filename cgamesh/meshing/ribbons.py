@@ -183,7 +183,12 @@ def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, d: np.ndarray, n_a
     suspicious = _may_reverse(n_a, n_b, s[1] - s[0])
     samples = _unit(_ruling_values(n_a, n_b, _COMPARE_AT, scale))
     agreement = np.einsum("kmc,kmc->k", samples[:-1], samples[1:])
-    rows = np.flatnonzero(np.convolve(suspicious, [1, 1, 1], mode="same") > 0)
+    # Each suspicious ring with its two neighbours (np.convolve's "same" mode would return
+    # three entries for two rings).
+    near = np.array(suspicious, dtype=bool)
+    near[1:] |= suspicious[:-1]
+    near[:-1] |= suspicious[1:]
+    rows = np.flatnonzero(near)
     if rows.size == 0:
         flipped = np.cumsum(np.concatenate([[False], agreement < 0.0])) % 2 == 1
         return np.where(flipped, -1.0, 1.0)[:, None], rows

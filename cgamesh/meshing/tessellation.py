@@ -28,7 +28,7 @@ import numpy as np
 
 from cgamesh.meshing.deviation import CIRCLES, SEGMENTS, circle_read_out, grid_deviation, segment_read_out
 from cgamesh.meshing.mesh import SurfaceMesh
-from cgamesh.meshing.circles import mesh_circle_surface, transported_frames
+from cgamesh.meshing.circles import DISTINCT_RING_FRACTION, distinct_rings, mesh_circle_surface, transported_frames
 from cgamesh.meshing.ribbons import mesh_ribbon_surface
 from cgamesh.geometry.surface import EvolvedSurface
 
@@ -180,6 +180,14 @@ def mesh_to_tolerance(surface: EvolvedSurface, tolerance: float, caps: bool = Fa
         mesh = mesh_circle_surface(surface, around, t=rings, caps=caps, closed=closed, with_tangents=tangents)
         grid = mesh.positions[: len(rings) * (around + 1)].reshape(len(rings), around + 1, 3)
         achieved = grid_deviation(surface, rings, grid, CIRCLES).max
+        distinct = distinct_rings(*circle_read_out(surface, rings), surface.frame.scale, surface.name)
+        if not distinct.all():
+            # Rings that would coincide in float32 (nearly identical controls) are left out of
+            # the mesh written. Each lay within 2 DISTINCT_RING_FRACTION of the surface's size
+            # of a ring kept before it, so the mesh moved by at most that: the figure grows by it.
+            mesh = mesh_circle_surface(surface, around, t=rings[distinct], caps=caps, closed=closed,
+                                       with_tangents=tangents)
+            achieved += 2.0 * DISTINCT_RING_FRACTION * surface.frame.scale
         # The next attempt, if any, tightens both shares alike.
         if spread == "greedy" and achieved > tolerance:
             around_share[0] *= max(0.25, 0.9 * tolerance / achieved)

@@ -95,13 +95,23 @@ def apply_uv_modes(meshes: list[SurfaceMesh], modes: list[tuple[str, float | Non
 
 def natural(mesh: SurfaceMesh, scale: float | None = None) -> SurfaceMesh:
     """Natural UVs with even texel density (see ``apply_uv_modes``)."""
-    lengths = mesh.uv_lengths if mesh.uv_lengths is not None else measured_lengths(mesh)
-    world = mesh.uvs * lengths
+    world = _natural_lengths(mesh)
     if scale is None:
         scale = float(world.max())
     if not scale > 0.0:
         return mesh
     return replace(mesh, uvs=world / scale)
+
+
+def natural_extent(mesh: SurfaceMesh) -> float:
+    """The largest natural UV in file units (u * Lu or v * Lv over the mesh): natural UVs with
+    ``uv_scale`` s reach this over s."""
+    return float(_natural_lengths(mesh).max(initial=0.0))
+
+
+def _natural_lengths(mesh: SurfaceMesh) -> np.ndarray:
+    lengths = mesh.uv_lengths if mesh.uv_lengths is not None else measured_lengths(mesh)
+    return mesh.uvs * lengths
 
 
 def measured_lengths(mesh: SurfaceMesh) -> np.ndarray:

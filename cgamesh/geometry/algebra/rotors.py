@@ -33,11 +33,12 @@ def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The smallest rotation rotor taking unit vectors a to b, each (..., 3) -> (..., 32).
 
     R = (1 + b a) / |1 + b a|. For b = -a any half turn works; the axis is then a unit
-    vector perpendicular to a, chosen deterministically.
+    vector perpendicular to a, chosen deterministically. a and b broadcast against each other
+    (one fixed vector against a batch, as the first ring of a tube is carried from e3).
     """
-    # Broadcast first: a single a against many b (the first ring's frame from e3) must index
-    # its opposite cases like b does.
     a, b = np.broadcast_arrays(np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64))
+    shape = a.shape[:-1]
+    a, b = a.reshape(-1, 3), b.reshape(-1, 3)  # one vector alone too: the half turns are set by mask
     rotor = _scalar(np.ones(a.shape[:-1])) + products.geometric(vector(b), vector(a), (1,), (1,), (0, 2))
     norm = np.sqrt(rotor[..., 0] ** 2 + rotor[..., _E12] ** 2 + rotor[..., _E13] ** 2 + rotor[..., _E23] ** 2)
     opposite = norm < 1e-8
@@ -52,7 +53,7 @@ def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         half_turn[..., _E12] = -axis[..., 2]
         rotor[opposite] = half_turn
         norm[opposite] = 1.0
-    return rotor / norm[..., None]
+    return (rotor / norm[..., None]).reshape(shape + (BLADE_COUNT,))
 
 
 def translator(t: np.ndarray) -> np.ndarray:

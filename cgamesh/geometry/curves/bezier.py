@@ -69,6 +69,7 @@ class RationalBezier:
         t = np.asarray(t, dtype=np.float64)
         order = self.control_count - 1
         w = np.asarray(self.weights, dtype=np.float64)
+        w = w / w.max()  # the curve is unchanged by a common factor; 1e300 weights stay finite
         b, db = bernstein(order, t), bernstein_derivative(order, t)
         denominator = b @ w
         d_denominator = db @ w
