@@ -14,7 +14,7 @@ values at once.
 from __future__ import annotations
 
 from cgamesh.budget import Budget, ResourceLimitError
-from cgamesh.tracer.roots import SAMPLED_CHUNK, interpolant_degree
+from cgamesh.tracer.roots import MOTOR_PROXY_DEGREE, SAMPLED_CHUNK, interpolant_degree
 
 MAX_POLYNOMIAL_DEGREE = 240  # Bezier tubes of up to 21 controls, ribbons of up to 41
 RAY_STATE = 16 * 2**10  # bytes per ray of everything else: rays, hits, shading, shadow rays
@@ -22,7 +22,10 @@ PIXEL_BYTES = 3 * 8 * 2  # a band's float RGB and its clipped copy
 
 
 def polynomial_degree(surface) -> int:
-    """An upper bound on the degree of the intersection polynomial of a traced surface."""
+    """An upper bound on the degree of the intersection polynomial of a traced surface (a motor
+    surface's is the fixed degree of its Chebyshev proxy, roots.py)."""
+    if surface.surface.interpolation == "motor":
+        return MOTOR_PROXY_DEGREE
     return (12 if surface.grade == 3 else 6) * interpolant_degree(surface.surface.curve)
 
 
@@ -35,7 +38,7 @@ def check_surfaces(surfaces, budget: Budget) -> None:
             if degree > MAX_POLYNOMIAL_DEGREE:
                 raise ResourceLimitError(
                     f"surface '{surface.name}': the polynomial root finder would solve polynomials of degree "
-                    f"{degree} per ray (its curve has degree {interpolant_degree(surface.surface.curve)}); "
+                    f"{degree} per ray; "
                     f"the most it solves is {MAX_POLYNOMIAL_DEGREE}: use --root-finder sampled")
         else:
             objects = finder.samples + 1
