@@ -14,6 +14,8 @@ from cgamesh.geometry.curves.kochanek_bartels import KochanekBartels
 from cgamesh.geometry.curves.linear import Linear
 from cgamesh.errors import CgameshError, InvalidInputError
 from cgamesh.geometry.frame import LocalFrame
+from cgamesh.geometry.motor_surface import MotorSurface
+from cgamesh.geometry.motors import MotionSpline
 from cgamesh.inputs.scene import SurfaceSpec
 from cgamesh.geometry.surface import EvolvedSurface
 
@@ -47,8 +49,11 @@ def _circle_points(spec: SurfaceSpec) -> tuple[np.ndarray, np.ndarray]:
     return np.array(points, dtype=np.float64), np.array(reach)
 
 
-def build_surface(spec: SurfaceSpec) -> EvolvedSurface:
-    """Normalised (and, with ``align``, aligned) control blades in a local frame, with the curve."""
+def build_surface(spec: SurfaceSpec) -> EvolvedSurface | MotorSurface:
+    """Normalised (and, with ``align``, aligned) control blades in a local frame, with the curve;
+    for ``interpolation: motor``, the similarity motion through the control circles instead."""
+    if spec.type == "circles" and spec.interpolation == "motor":
+        return build_motor_surface(spec)
     try:
         if spec.type == "circles":
             frame = LocalFrame.enclosing(*_circle_points(spec))
@@ -77,3 +82,31 @@ def _circle_blade(control, frame: LocalFrame) -> np.ndarray:
         np.array(control.normal, dtype=np.float64),
         control.radius / frame.scale,
     )
+
+
+def build_motor_surface(spec: SurfaceSpec) -> MotorSurface:
+    """The splined similarity motion through a circle surface's controls (docs/interpolation.md).
+
+    Controls are read exactly as for blade surfaces (a ``through`` circle is the circle A ^ B ^ D,
+    its normal right-handed about A -> B -> D), then taken as centre, normal and radius.
+    """
+    try:
+        frame = LocalFrame.enclosing(*_circle_points(spec))
+        read = [_circle_parameters(control, frame) for control in spec.controls]
+        centre, normal, radius = (np.array(part, dtype=np.float64) for part in zip(*read))
+    except CgameshError as error:
+        raise type(error)(f"{spec.location}: {error}") from None
+    weights = tuple(c.weight for c in spec.controls) if spec.curve == "rational_bezier" else None
+    path = MotionSpline.through(centre, normal, radius, spec.curve, spec.closed, spec.tension, spec.bias,
+                                spec.continuity, weights, spec.align)
+    return MotorSurface(spec.name, path, frame)
+
+
+def _circle_parameters(control, frame: LocalFrame) -> tuple[np.ndarray, np.ndarray, float]:
+    """Local centre, unit normal and radius of a circle control (given ones kept exactly)."""
+    if control.through is not None:
+        centre, normal, radius = objects.circle_euclidean(_circle_blade(control, frame))
+        return centre, normal, float(radius)
+    normal = np.array(control.normal, dtype=np.float64)
+    return frame.to_local(np.array(control.center, dtype=np.float64)), normal / np.linalg.norm(normal), \
+        control.radius / frame.scale

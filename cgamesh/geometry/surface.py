@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Protocol
+from typing import ClassVar, Protocol
 
 import numpy as np
 
@@ -46,6 +46,8 @@ class EvolvedSurface:
     controls: np.ndarray
     curve: Curve
     frame: LocalFrame
+    # how circles are interpolated (a motor surface, geometry/motor_surface.py, says "motor")
+    interpolation: ClassVar[str] = "blade"
 
     @property
     def segment_count(self) -> int:

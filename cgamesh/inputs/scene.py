@@ -42,7 +42,9 @@ NAME_PATTERN = "[A-Za-z_][A-Za-z0-9_]*"
 
 _TOP_KEYS = ("cgamesh", "units", "up", "surfaces") + RENDERING_KEYS
 _SURFACE_KEYS = ("name", "type", "curve", "tension", "bias", "continuity", "closed", "align",
-                 "controls", "resolution", "tolerance", "caps", "material", "uv", "uv_scale")
+                 "controls", "resolution", "tolerance", "caps", "material", "uv", "uv_scale",
+                 "interpolation")
+INTERPOLATIONS = ("blade", "motor")
 UV_MODES = ("natural", "xatlas", "none")
 _CIRCLE_KEYS = ("center", "normal", "radius", "through", "weight")
 _POINT_PAIR_KEYS = ("a", "b", "weight")
@@ -230,6 +232,12 @@ def _surface(r: _Reader, node: yaml.Node, path: str,
         raise r.error(entries["caps"], f"{path}.caps",
                       "must be false when closed is true (a closed tube has no ends), got true")
 
+    interpolation = r.optional(entries, "interpolation", path, "blade", r.choice, INTERPOLATIONS)
+    if interpolation == "motor" and kind != "circles":
+        raise r.error(entries["interpolation"], f"{path}.interpolation",
+                      f"must be blade for type {kind} (motor carries circles by similarity motions; "
+                      "a point pair has no motor interpolation), got motor")
+
     controls_node = r.require(node, entries, "controls", path, "a list of controls")
     controls = _controls(r, controls_node, f"{path}.controls", kind, curve, closed)
     around, along, tolerance = _resolution(r, entries, path, kind)
@@ -245,7 +253,8 @@ def _surface(r: _Reader, node: yaml.Node, path: str,
         if uv_scale <= 0.0:
             raise r.error(scale_node, f"{path}.uv_scale", f"must be > 0, got {uv_scale!r}")
     return SurfaceSpec(name, kind, curve, tension, bias, continuity, closed, align, controls,
-                       around, along, tolerance, caps, material, r.location(node, path), uv, uv_scale)
+                       around, along, tolerance, caps, material, r.location(node, path), uv, uv_scale,
+                       interpolation)
 
 
 def _kb_parameter(r: _Reader, entries: dict, key: str, path: str, curve: str) -> float:

@@ -45,6 +45,16 @@ as large as its terms) and complex pairs, and recovers the true roots inside clu
 Sampled (section 5.1.1): the same functions at N + 1 objects per segment, sign changes and
 a local quadratic, plus grazing double roots (``sampled``). No polishing: that is the
 paper's algorithm, whose accuracy against N the benchmark measures.
+
+Motor surfaces (docs/interpolation.md) have no interpolant C' whose blend is polynomial in
+alpha, so no exact intersection polynomial. "polynomial" then samples (L v C)^2 on the
+MOTOR_PROXY_DEGREE + 1 circles at a segment's Chebyshev points and takes the real roots of
+the interpolating Chebyshev series (a proxy of the smooth function: colleague-matrix
+eigenvalues, as for blade surfaces); "sampled" is the sampled finder at N + 1 circles,
+which, as for blade surfaces, misses two roots within one step (a ray in or near a circle's
+plane meets it twice: a double root the samples only touch), so ``verify`` on motor
+surfaces wants the default. Either way each candidate gets MOTOR_NEWTON_STEPS Newton steps on the true function (dC/dt in closed
+form) and is accepted like a polynomial root, by its residual.
 """
 
 from __future__ import annotations
@@ -71,6 +81,10 @@ ROOT_RTOL = {3: 1e-10, 2: 1e-10}
 # Candidates with a larger residual than that but below this get Newton steps on the true function.
 REFINE_BELOW = 1e-2
 REFINE_STEPS = 3
+# Newton steps polishing every sampled root of a motor surface.
+MOTOR_NEWTON_STEPS = 6
+# Degree of the Chebyshev proxy of (L v C)^2 on a motor segment.
+MOTOR_PROXY_DEGREE = 32
 # |F| below this fraction of its largest on a segment is a zero of W- for every ray.
 STRUCTURAL_RTOL = 1e-9
 
@@ -162,7 +176,8 @@ class SurfaceRoots:
     def __init__(self, surface: EvolvedSurface):
         self.surface = surface
         self.grade = surface.grade
-        self.degree = interpolant_degree(surface.curve)
+        self.motor = surface.interpolation == "motor"
+        self.degree = None if self.motor else interpolant_degree(surface.curve)
         self._polynomials: dict[int, _Polynomial] = {}
         self._known: dict[int, np.ndarray] = {}
         self._samples: dict[tuple[int, int], _Samples] = {}
@@ -248,9 +263,48 @@ class SurfaceRoots:
         are divided out): 8 for linear circles, 4 for linear point pairs (see the module doc)."""
         return self.polynomial(segment).degree
 
+    def _proxy_roots(self, coefficients: np.ndarray, segment: int) -> tuple[np.ndarray, np.ndarray]:
+        """(ray index (R,), t (R,)) of the real roots of the Chebyshev proxy of (L v C)^2 on a
+        segment (motor surfaces), with both segment ends as candidates too (a ray through an end
+        circle meets the proxy's roots there only roughly)."""
+        key = (segment, -MOTOR_PROXY_DEGREE)
+        if key not in self._samples:
+            u = chebyshev.nodes(MOTOR_PROXY_DEGREE)
+            t = segment + 0.5 * (u + 1.0)
+            self._samples[key] = _Samples(t, meet_matrix(self.surface.sample(t).blades, self.grade))
+        matrix = self._samples[key].matrix
+        found = [(np.zeros(0, dtype=np.int64), np.zeros(0))]
+        chunk = max(1, SAMPLED_CHUNK // matrix.shape[1])
+        for start in range(0, len(coefficients), chunk):
+            f = _square(meet_values(coefficients[start:start + chunk], matrix, self.grade))
+            size = np.abs(f).max(axis=1, keepdims=True)
+            series = chebyshev.coefficients(f / np.where(size > 0.0, size, 1.0))
+            u = chebyshev.roots(series)
+            which, column = np.nonzero(~np.isnan(u))
+            u = chebyshev.polish(series[which], u[which, column])
+            ends = np.arange(f.shape[0])
+            found.append((start + np.concatenate([which, ends, ends]),
+                          np.concatenate([segment + 0.5 * (u + 1.0), np.full(ends.size, float(segment)),
+                                          np.full(ends.size, segment + 1.0)])))
+        which, t = (np.concatenate(parts) for parts in zip(*found))
+        return which, t
+
+    def _sampled(self, coefficients: np.ndarray, segment: int, count: int) -> tuple[np.ndarray, np.ndarray]:
+        """(ray index (R,), t (R,)) of the sampled finder's roots on a segment, in chunks."""
+        samples = self.samples_of(segment, count)
+        chunk = max(1, SAMPLED_CHUNK // samples.matrix.shape[1])
+        found = [(np.zeros(0, dtype=np.int64), np.zeros(0))]
+        for start in range(0, len(coefficients), chunk):
+            values = meet_values(coefficients[start:start + chunk], samples.matrix, self.grade)
+            f = _square(values) if self.grade == 3 else values[..., 0]
+            found.append(sampled.sign_change_roots(f, samples.t))
+            found[-1] = (start + found[-1][0], found[-1][1])
+        which, t = (np.concatenate(parts) for parts in zip(*found))
+        return which, t
+
     def known_roots(self, segment: int) -> np.ndarray:
         """Parameters t in [segment, segment + 1] where W- vanishes for every ray (divided out)."""
-        if self.surface.four_vector_free:
+        if self.motor or self.surface.four_vector_free:
             return np.zeros(0)
         if segment not in self._known:
             self._known[segment] = np.sort(segment + 0.5 * (self.structural_zeros(segment) + 1.0))
@@ -259,6 +313,8 @@ class SurfaceRoots:
     def objects(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
         """X+ = (s + beta - F) C' (a positive multiple of C(t), no projection needed) and
         X- = (s - beta - F) C' (None when the surface is free of 4-vectors) at parameters t (R,)."""
+        if self.motor:  # circles by construction: no projection, no second branch
+            return self.surface.sample(t).blades, None
         g = self.grade
         interpolant = self.interpolant(t)
         if self.surface.four_vector_free:
@@ -287,10 +343,10 @@ class SurfaceRoots:
             return np.abs(_square(value)) / (size * size)
         return np.abs(value[:, 0]) / size
 
-    def newton(self, lines: np.ndarray, t: np.ndarray, segment: int) -> np.ndarray:
+    def newton(self, lines: np.ndarray, t: np.ndarray, segment: int, steps: int = REFINE_STEPS) -> np.ndarray:
         """Newton steps on the true function (L v C)^2 (or L v P) with dC/dt from the projection's
         closed-form derivative, inside the segment."""
-        for _ in range(REFINE_STEPS):
+        for _ in range(steps):
             projection = self.surface.sample(t)
             value = self.line_values(lines, projection.blades)
             rate = self.line_values(lines, projection.derivatives)
@@ -328,6 +384,15 @@ class SurfaceRoots:
         rows = np.arange(len(lines))
         coefficients = lines[:, cga.GRADE_BLADES[3]]
         g = self.grade
+        if self.motor:
+            if finder.kind == "sampled":
+                which, t = self._sampled(coefficients, segment, finder.samples)
+            else:
+                which, t = self._proxy_roots(coefficients, segment)
+            t = self.newton(lines[which], t, segment, MOTOR_NEWTON_STEPS)
+            objects = self.objects(t)[0]
+            ok = self.residual(lines[which], objects) <= rtol
+            return rows[which][ok], t[ok], objects[ok]
         if finder.kind == "sampled":
             samples = self.samples_of(segment, finder.samples)
             chunk = max(1, SAMPLED_CHUNK // samples.matrix.shape[1])
