@@ -1,0 +1,176 @@
+"""Real data, file to GLB, cgamesh against pyvista side by side (pyvista: a benchmark-only baseline).
+
+Each case runs as a whole process (read, mesh, write a GLB), cgamesh and pyvista interleaved,
+best of a few runs; every child's peak resident memory comes from its own rusage (os.wait4).
+Cases: dipy's fornix (tracks300.trk), the same streamlines repeated to a larger count, and
+navis' neurons, at 8 vertices around and 3 extra rings between nodes. pyvista's baselines:
+``Spline`` (the same rings per node) + ``tube``, and its plain polyline ``tube`` at one ring
+per node; both read the same chains (cgamesh's reader) and write a GLB with trimesh. Printed:
+time ratios, the per-surface overhead of the batched pass, and peak memory against the bytes
+of the mesh arrays written. Results are checked (vertex counts, finite arrays); times are
+printed, never asserted. The big-tube figures: ``python benchmarks/bench_tubes.py``.
+
+    python benchmarks/bench_realdata.py [--repeat 3] [--copies 10] [--neurons 3] [--tiny]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+AROUND, SUBDIVIDE = 8, 3
+
+CGAMESH_CHILD = """
+import sys
+from cgamesh_cli.main import main
+sys.exit(main([sys.argv[1], '-o', sys.argv[2], '--radius', sys.argv[3], '--around', '8', '--subdivide', '3', '-q']))
+"""
+
+PYVISTA_CHILD = """
+import sys
+import numpy as np
+import pyvista as pv
+import trimesh
+from cgamesh.centerline_pipeline import _chains
+from cgamesh.inputs.centerlines import read_centerlines
+path, out, radius, mode = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
+lines = read_centerlines(path)
+chains, _ = _chains(lines)
+blocks = []
+for chain in chains:
+    p = lines.points[chain.nodes]
+    keep = np.concatenate([[True], np.any(p[1:] != p[:-1], axis=1)])
+    p = p[keep]
+    if len(p) < 2:
+        continue
+    line = pv.Spline(p, (len(p) - 1) * 4 + 1) if mode == 'spline' else pv.lines_from_points(p)
+    blocks.append(line.tube(radius=radius, n_sides=8, capping=False))
+mesh = pv.merge(blocks).triangulate()
+faces = mesh.faces.reshape(-1, 4)[:, 1:]
+trimesh.Trimesh(mesh.points, faces, vertex_normals=mesh.point_normals, process=False).export(out)
+print(mesh.n_points)
+"""
+
+
+def run_child(code: str, args: list[str]) -> tuple[float, float, str]:
+    """(wall seconds, peak resident MB, stdout) of one child process."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    start = time.perf_counter()
+    child = subprocess.Popen([sys.executable, "-c", code, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             env=env, text=True)
+    out, err = child.communicate()
+    _, status, usage = os.wait4(child.pid, 0) if child.returncode is None else (0, 0, None)
+    seconds = time.perf_counter() - start
+    if child.returncode not in (0, 3):
+        raise SystemExit(f"child failed ({child.returncode}): {err.strip()[-400:]}")
+    return seconds, float("nan") if usage is None else usage.ru_maxrss / 1024.0, out
+
+
+def peak_rss(code: str, args: list[str]) -> float:
+    """Peak resident MB of one child run, from its own rusage."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    child = subprocess.Popen([sys.executable, "-c", code, *args], stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL, env=env)
+    _, status, usage = os.wait4(child.pid, 0)
+    if os.waitstatus_to_exitcode(status) not in (0, 3):
+        raise SystemExit(f"child failed with status {status}")
+    return usage.ru_maxrss / 1024.0
+
+
+def glb_vertices(path: Path) -> int:
+    import pygltflib
+
+    gltf = pygltflib.GLTF2().load(str(path))
+    return sum(gltf.accessors[p.attributes.POSITION].count for m in gltf.meshes for p in m.primitives)
+
+
+def repeated_tractogram(source: Path, copies: int, folder: Path) -> Path:
+    """The streamlines of ``source`` ``copies`` times, as .npz arrays (points, offsets)."""
+    from cgamesh.inputs.centerlines import read_centerlines
+
+    lines = read_centerlines(str(source))
+    count = len(lines.offsets) - 1
+    lengths = np.diff(lines.offsets)
+    points = np.concatenate([lines.points] * copies)
+    offsets = np.concatenate([[0], np.cumsum(np.tile(lengths, copies))])
+    path = folder / f"fornix_x{copies}.npz"
+    np.savez(path, points=points, offsets=offsets)
+    print(f"repeated tractogram: {count * copies} streamlines, {len(points)} points")
+    return path
+
+
+def case(name: str, path: Path, radius: float, repeat: int, folder: Path) -> dict:
+    """Interleaved runs of cgamesh, pyvista Spline+tube and pyvista tube; best times."""
+    best = {"cgamesh": np.inf, "spline": np.inf, "tube": np.inf}
+    outputs = {key: folder / f"{name}_{key}.glb" for key in best}
+    for _ in range(repeat):
+        for key in best:
+            code, extra = (CGAMESH_CHILD, []) if key == "cgamesh" else (PYVISTA_CHILD, [key])
+            seconds, _, _ = run_child(code, [str(path), str(outputs[key]), str(radius), *extra])
+            best[key] = min(best[key], seconds)
+    memory = peak_rss(CGAMESH_CHILD, [str(path), str(outputs["cgamesh"]), str(radius)])
+    ours, theirs = glb_vertices(outputs["cgamesh"]), glb_vertices(outputs["spline"])
+    assert ours > 0 and theirs > 0, (ours, theirs)
+    # cgamesh repeats the seam column ((around + 1) / around of pyvista's vertices on the same
+    # rings) and adds junction and soma spheres to neurons
+    assert ours / (AROUND + 1) >= 0.98 * theirs / AROUND, (name, ours, theirs)
+    if path.suffix == ".trk":
+        assert abs(ours / (AROUND + 1) - theirs / AROUND) <= 0.02 * theirs / AROUND + 2, (name, ours, theirs)
+    written = outputs["cgamesh"].stat().st_size / 2**20
+    print(f"{name:>22}: cgamesh {best['cgamesh']:.2f} s, pyvista Spline+tube {best['spline']:.2f} s "
+          f"(ratio {best['cgamesh'] / best['spline']:.2f}x, target <= 1.0x), plain tube {best['tube']:.2f} s "
+          f"(ratio {best['cgamesh'] / best['tube']:.2f}x, target <= 3x); {ours} vertices; peak memory "
+          f"{memory:.0f} MB for {written:.1f} MB written ({memory / written:.1f}x, target <= 3x)")
+    return best
+
+
+def per_surface_overhead(counts: list[int]) -> None:
+    """Time of N tiny tubes (2 nodes each) through the batched pass, over N."""
+    from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+    from cgamesh.inputs.centerlines import Centerlines  # noqa: F401 (the API builds it)
+    from cgamesh.api import tubes
+
+    rng = np.random.default_rng(1)
+    for n in counts:
+        polylines = [rng.normal(size=(2, 3)) * 10.0 for _ in range(n)]
+        start = time.perf_counter()
+        built = tubes(polylines, radii=0.5, units="mm")
+        seconds = time.perf_counter() - start
+        assert sum(m.vertex_count for m in built.meshes) == n * 5 * (AROUND + 1), "vertex count"
+        print(f"per-surface overhead, N = {n:>6}: {1e6 * seconds / n:.1f} us per surface (target < 50 us)")
+    del TubeOptions, mesh_centerlines
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--copies", type=int, default=10, help="fornix copies (10 = 3,000 streamlines)")
+    parser.add_argument("--neurons", type=int, default=3)
+    parser.add_argument("--tiny", action="store_true", help="one run, small sizes (the CI test)")
+    args = parser.parse_args(argv)
+    from realdata_files import fornix, neurons
+
+    repeat = 1 if args.tiny else args.repeat
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        case("fornix", fornix(), 0.5, repeat, folder)
+        if args.copies > 1:
+            case(f"fornix x{args.copies}", repeated_tractogram(fornix(), args.copies, folder), 0.5, repeat, folder)
+        for path in sorted(neurons(), key=lambda p: p.stat().st_size)[: args.neurons]:
+            case(path.stem, path, 40.0, repeat, folder)
+    per_surface_overhead([10, 100] if args.tiny else [100, 1000, 10000])
+    print("big-tube figures: python benchmarks/bench_tubes.py")
+
+
+if __name__ == "__main__":
+    main()
