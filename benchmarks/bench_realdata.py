@@ -146,7 +146,7 @@ def per_surface_overhead(counts: list[int]) -> None:
         start = time.perf_counter()
         built = tubes(polylines, radii=0.5, units="mm")
         seconds = time.perf_counter() - start
-        assert sum(m.vertex_count for m in built.meshes) == n * 5 * (AROUND + 1), "vertex count"
+        assert sum(m.vertex_count for m, _ in built.surfaces) == n * 5 * (AROUND + 1), "vertex count"
         print(f"per-surface overhead, N = {n:>6}: {1e6 * seconds / n:.1f} us per surface (target < 50 us)")
     del TubeOptions, mesh_centerlines
 

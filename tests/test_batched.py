@@ -1,0 +1,147 @@
+"""The batched meshing pass gives the per-chain path's meshes (cgamesh.meshing.batch_pass).
+
+Measured agreement (documented in docs/real-data.md): faces, the ``segment`` and ``radius``
+attributes and the skipped lines are identical; positions and UVs agree within 1e-12 of
+the mesh's size; normals within 1e-9 (absolute, they are unit vectors): the batched pass
+reads rings from the motion directly, the per-chain path from the circle blades, and where
+the normal field is nearly degenerate its rounding differs by up to a few 1e-10.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+from cgamesh.inputs.centerlines import read_centerlines
+from realdata_files import fornix, smallest_neuron
+
+POSITION_TOLERANCE = 1e-12
+NORMAL_TOLERANCE = 1e-9
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def assert_same(lines, options: TubeOptions) -> None:
+    one = mesh_centerlines(lines, options, batched=False)
+    many = mesh_centerlines(lines, options, batched=True)
+    assert many.skipped == one.skipped
+    assert len(many.meshes) == len(one.meshes)
+    for a, b in zip(many.meshes, one.meshes):
+        assert a.name == b.name
+        size = max(float(np.abs(b.positions).max()), 1e-300)
+        np.testing.assert_array_equal(a.faces, b.faces)
+        assert np.abs(a.positions - b.positions).max() <= POSITION_TOLERANCE * size
+        assert np.abs(a.uvs - b.uvs).max() <= POSITION_TOLERANCE
+        assert np.abs(a.normals - b.normals).max() <= NORMAL_TOLERANCE
+        assert np.allclose(np.linalg.norm(a.normals, axis=1), 1.0, atol=1e-12)
+        assert (a.colors is None) == (b.colors is None)
+        if a.colors is not None:
+            assert np.abs(a.colors - b.colors).max() <= NORMAL_TOLERANCE
+        assert sorted(a.attributes) == sorted(b.attributes)
+        for key in a.attributes:
+            assert np.abs(a.attributes[key] - b.attributes[key]).max() <= POSITION_TOLERANCE * max(
+                1.0, float(np.abs(b.attributes[key]).max()))
+
+
+@pytest.mark.parametrize("color_by", ["none", "radius", "direction", "segment"])
+@pytest.mark.parametrize("split", [False, True])
+def test_neuron_junctions_and_soma(color_by, split):
+    from dataclasses import replace
+
+    lines = read_centerlines(str(smallest_neuron()))
+    kinds = lines.kinds.copy()
+    kinds[np.flatnonzero(lines.parents < 0)] = 1  # the root a soma: its chains go the per-chain way
+    lines = replace(lines, kinds=kinds)
+    assert_same(lines, TubeOptions(color_by=color_by, split=split))
+
+
+@pytest.mark.parametrize("split", [False, True])
+def test_streamlines(split):
+    lines = read_centerlines(str(fornix()))
+    offsets = lines.offsets[:41]  # 40 streamlines keep the test short
+    from cgamesh.api import tubes
+
+    polylines = [lines.points[a:b] for a, b in zip(offsets[:-1], offsets[1:])]
+    assert tubes(polylines, radii=0.5, units="mm", split=split, color_by="direction").surfaces
+    sub = _polylines(polylines)
+    assert_same(sub, TubeOptions(radius=0.5, split=split, color_by="direction"))
+
+
+def _polylines(polylines, scalars=None):
+    from cgamesh.inputs.centerlines import Centerlines
+
+    points = np.concatenate(polylines)
+    offsets = np.concatenate([[0], np.cumsum([len(p) for p in polylines])])
+    return Centerlines(points=points, offsets=offsets, source="polylines", units="mm", scalars=scalars or {})
+
+
+def test_degenerate_chain_is_skipped_with_its_line():
+    good = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.5, 0.0]])
+    single_point = np.array([[5.0, 5.0, 5.0], [5.0, 5.0, 5.0]])  # one distinct point
+    lines = _polylines([good, single_point, good + 3.0])
+    assert_same(lines, TubeOptions(radius=0.2))
+    built = mesh_centerlines(lines, TubeOptions(radius=0.2))
+    assert len(built.skipped) == 1 and "streamline 1" in built.skipped[0]
+    with pytest.raises(Exception, match="streamline 1"):
+        mesh_centerlines(lines, TubeOptions(radius=0.2, strict=True))
+
+
+AXES = [np.array(v, dtype=float) for v in ([1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1])]
+
+
+@st.composite
+def polyline(draw):
+    count = draw(st.integers(2, 7))
+    steps = []
+    for _ in range(count - 1):
+        if draw(st.booleans()):
+            steps.append(AXES[draw(st.integers(0, 5))] * draw(st.sampled_from([0.0, 0.3, 1.0, 4.0])))
+        else:
+            steps.append(np.array(draw(st.lists(st.floats(-3.0, 3.0), min_size=3, max_size=3))))
+    start = np.array(draw(st.lists(st.floats(-100.0, 100.0), min_size=3, max_size=3)))
+    return start + np.concatenate([[np.zeros(3)], np.cumsum(steps, axis=0)])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(polyline(), min_size=1, max_size=6), st.sampled_from([0.05, 0.5, 2.0]),
+       st.sampled_from(["none", "direction", "radius"]), st.booleans())
+def test_random_polylines(polylines, radius, color_by, split):
+    """Orientations along exact +-axes, duplicate points (zero steps), 2-node chains, turns back."""
+    lines = _polylines(polylines)
+    try:
+        mesh_centerlines(lines, TubeOptions(radius=radius), batched=False)
+    except Exception:  # nothing meshable: both paths must refuse alike
+        with pytest.raises(Exception):
+            mesh_centerlines(lines, TubeOptions(radius=radius))
+        return
+    assert_same(lines, TubeOptions(radius=radius, color_by=color_by, split=split))
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(3, 40), st.integers(0, 2**31 - 1), st.booleans())
+def test_random_trees(count, seed, split):
+    """Trees with junctions: each node's parent is an earlier node."""
+    from cgamesh.inputs.centerlines import Centerlines
+
+    rng = np.random.default_rng(seed)
+    parents = np.array([-1] + [int(rng.integers(0, i)) for i in range(1, count)])
+    points = np.zeros((count, 3))
+    for i in range(1, count):
+        points[i] = points[parents[i]] + rng.choice([-1.0, 1.0]) * np.eye(3)[rng.integers(0, 3)] * rng.uniform(0.5, 3.0) \
+            + (rng.normal(size=3) if rng.random() < 0.5 else 0.0)
+    radii = rng.uniform(0.05, 0.4, size=count)
+    lines = Centerlines(points=points, parents=parents, radii=radii, source="tree", units="um")
+    assert_same(lines, TubeOptions(split=split, color_by="segment"))
+
+
+def test_benchmark_runs_at_tiny_size():
+    result = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_realdata.py"), "--tiny", "--copies", "1",
+                             "--neurons", "1"], capture_output=True, text=True, timeout=900)
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "ratio" in result.stdout and "per-surface overhead" in result.stdout
