@@ -139,6 +139,35 @@ def test_random_trees(count, seed, split):
     assert_same(lines, TubeOptions(split=split, color_by="segment"))
 
 
+def test_progress_counts_every_chain_in_chunks():
+    from cgamesh.meshing.batch_pass import chains as batch_chains
+
+    lines = read_centerlines(str(smallest_neuron()))
+    calls = []
+    built = mesh_centerlines(lines, TubeOptions(), progress=lambda label, count=1: calls.append(count))
+    assert sum(calls) == built.chains
+    assert len(calls) < built.chains  # chunks, not one call per chain
+    assert max(calls) > 1 and batch_chains.CHUNK_RINGS > 0
+
+
+def test_progress_bar_draws_counts():
+    import io
+    import time
+
+    from cgamesh import progress as progress_module
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    stream = Terminal()
+    bar = progress_module.Progress(100, stream=stream)
+    bar.start = time.perf_counter() - 2.0  # past the silent first second
+    bar.advance("chains 1-40", 40)
+    bar.advance("chain 41", 1)
+    assert bar.done == 41 and "41/100" in stream.getvalue()
+
+
 def test_benchmark_runs_at_tiny_size():
     result = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_realdata.py"), "--tiny", "--copies", "1",
                              "--neurons", "1"], capture_output=True, text=True, timeout=900)

@@ -112,9 +112,10 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
             if options.strict:
                 raise
             skipped.append((int(index), str(error)))
+            progress(chains[int(index)].label, 1)
             continue
         meshed[index] = pieces_by_chain[int(index)] is not None
-        if not batched[index] or fallback[index]:
+        if not batched[index]:  # a batched chain handed back was counted with its chunk
             progress(chains[int(index)].label, 1)
     skipped = [line for _, line in sorted(skipped)]
     _junction_events(meshed, m_first, m_count, m_nodes, m_t, tangents, segment_of)
