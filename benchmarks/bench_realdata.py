@@ -56,7 +56,7 @@ for chain in chains:
         continue
     line = pv.Spline(p, (len(p) - 1) * 4 + 1) if mode == 'spline' else pv.lines_from_points(p)
     blocks.append(line.tube(radius=radius, n_sides=8, capping=False))
-mesh = pv.merge(blocks).triangulate()
+mesh = pv.merge(blocks, merge_points=False).triangulate()  # no search for coincident points
 faces = mesh.faces.reshape(-1, 4)[:, 1:]
 trimesh.Trimesh(mesh.points, faces, vertex_normals=mesh.point_normals, process=False).export(out)
 print(mesh.n_points)

@@ -172,4 +172,4 @@ def test_benchmark_runs_at_tiny_size():
     result = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_realdata.py"), "--tiny", "--copies", "1",
                              "--neurons", "1"], capture_output=True, text=True, timeout=900)
     assert result.returncode == 0, result.stderr[-2000:]
-    assert "ratio" in result.stdout and "per-surface overhead" in result.stdout
+    assert "Spline+tube" in result.stdout and "CPU" in result.stdout and "per-surface overhead" in result.stdout
