@@ -31,13 +31,29 @@ sys.path.insert(0, str(ROOT / "tests"))
 AROUND, SUBDIVIDE = 8, 3
 BLAS_THREADS = 0  # 0: the environment's setting (--blas-threads)
 
-CGAMESH_CHILD = """
-import sys
-from cgamesh_cli.main import main
-sys.exit(main([sys.argv[1], '-o', sys.argv[2], '--radius', sys.argv[3], '--around', '8', '--subdivide', '3', '-q']))
+# Each child prints its own peak resident memory (VmHWM, reset at exec) last: the rusage
+# ru_maxrss of a child also counts the parent's pages it was forked from.
+PEAK = """
+def peak_kb():
+    try:
+        for line in open('/proc/self/status'):
+            if line.startswith('VmHWM:'):
+                return int(line.split()[1])
+    except OSError:
+        pass
+    import resource
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 """
 
-PYVISTA_CHILD = """
+CGAMESH_CHILD = PEAK + """
+import sys
+from cgamesh_cli.main import main
+code = main([sys.argv[1], '-o', sys.argv[2], '--radius', sys.argv[3], '--around', '8', '--subdivide', '3', '-q'])
+print('PEAK_KB', peak_kb())
+sys.exit(code)
+"""
+
+PYVISTA_CHILD = PEAK + """
 import sys
 import numpy as np
 import pyvista as pv
@@ -59,32 +75,41 @@ for chain in chains:
 mesh = pv.merge(blocks, merge_points=False).triangulate()  # no search for coincident points
 faces = mesh.faces.reshape(-1, 4)[:, 1:]
 trimesh.Trimesh(mesh.points, faces, vertex_normals=mesh.point_normals, process=False).export(out)
-print(mesh.n_points)
+print('PEAK_KB', peak_kb())
 """
 
 
 def run_child(code: str, args: list[str]) -> tuple[float, float, float]:
-    """(wall seconds, CPU seconds (user + system), peak resident MB) of one child process,
-    from its own rusage: on a machine shared with other work the CPU time is the steadier figure."""
+    """(wall seconds, CPU seconds (user + system, from its rusage), peak resident MB (its own
+    report)) of one child process: on a machine shared with other work CPU time is the steadier figure."""
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     if BLAS_THREADS:
         env["OPENBLAS_NUM_THREADS"] = env["OMP_NUM_THREADS"] = str(BLAS_THREADS)
     start = time.perf_counter()
-    child = subprocess.Popen([sys.executable, "-c", code, *args], stdout=subprocess.DEVNULL,
+    child = subprocess.Popen([sys.executable, "-c", code, *args], stdout=subprocess.PIPE,
                              stderr=subprocess.DEVNULL, env=env)
+    output = child.stdout.read().decode()
+    child.stdout.close()
     _, status, usage = os.wait4(child.pid, 0)
     seconds = time.perf_counter() - start
     child.returncode = os.waitstatus_to_exitcode(status)
     if child.returncode not in (0, 3):
         raise SystemExit(f"child failed with exit status {child.returncode}: {args}")
-    return seconds, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0
+    peak = [int(line.split()[1]) for line in output.splitlines() if line.startswith("PEAK_KB")]
+    return seconds, usage.ru_utime + usage.ru_stime, peak[-1] / 1024.0
 
 
 def glb_vertices(path: Path) -> int:
-    import pygltflib
+    """Vertex count of a GLB from its JSON chunk alone (the parent stays small: a child's
+    rusage would otherwise include the pages of the parent it was forked from)."""
+    import json
+    import struct
 
-    gltf = pygltflib.GLTF2().load(str(path))
-    return sum(gltf.accessors[p.attributes.POSITION].count for m in gltf.meshes for p in m.primitives)
+    with open(path, "rb") as file:
+        file.read(12)
+        length, _ = struct.unpack("<II", file.read(8))
+        gltf = json.loads(file.read(length))
+    return sum(gltf["accessors"][p["attributes"]["POSITION"]]["count"] for m in gltf["meshes"] for p in m["primitives"])
 
 
 def repeated_tractogram(source: Path, copies: int, folder: Path) -> Path:
