@@ -160,8 +160,6 @@ def case(name: str, path: Path, radius: float, repeat: int, folder: Path) -> dic
 
 def per_surface_overhead(counts: list[int]) -> None:
     """Time of N tiny tubes (2 nodes each) through the batched pass, over N."""
-    from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
-    from cgamesh.inputs.centerlines import Centerlines  # noqa: F401 (the API builds it)
     from cgamesh.api import tubes
 
     rng = np.random.default_rng(1)
@@ -172,7 +170,6 @@ def per_surface_overhead(counts: list[int]) -> None:
         seconds = time.perf_counter() - start
         assert sum(m.vertex_count for m, _ in built.surfaces) == n * 5 * (AROUND + 1), "vertex count"
         print(f"per-surface overhead, N = {n:>6}: {1e6 * seconds / n:.1f} us per surface (target < 50 us)")
-    del TubeOptions, mesh_centerlines
 
 
 def main(argv: list[str] | None = None) -> None:

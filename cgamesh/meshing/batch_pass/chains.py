@@ -19,6 +19,7 @@ import numpy as np
 from cgamesh.errors import CgameshError
 from cgamesh.meshing.batch_pass.motions import ChainMotions, ChainNodes
 from cgamesh.meshing.batch_pass.rings import TubeArrays, mesh_chains
+from cgamesh.meshing.circles import _grid_weld  # the per-chain mesher's seam weld, shared
 from cgamesh.meshing.mesh import SurfaceMesh
 
 # Rings meshed per chunk: the circle blades and their products (about 3 kB per ring) stay
@@ -124,7 +125,7 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
     for members, result in arrays.values():
         batched_meshes.update(_chain_meshes(members, result, m_first, m_count, m_r, m_t, scalar, m_nodes, chains,
                                             options, stem, label_name))
-    return _ordered(batched_meshes, pieces_by_chain, total, options, stem), skipped
+    return _ordered(batched_meshes, pieces_by_chain), skipped
 
 
 def _mesh_chunk(members, first, count, p, t, r, options) -> TubeArrays:
@@ -202,8 +203,6 @@ def _chain_meshes(members, result: TubeArrays, first, count, radii, t, scalar, n
         vs, ve, fs, fe = v_start[lo], v_start[hi + 1], f_start[lo], f_start[hi + 1]
         if options.split:
             faces = result.faces[fs:fe].astype(np.int32)
-            from cgamesh.meshing.circles import _grid_weld
-
             weld = _grid_weld(vertex_counts[lo] // columns, options.around, False)
             name = f"{stem}_{label_name(chains[int(members[lo])].label)}"
         else:
@@ -220,7 +219,7 @@ def _chain_meshes(members, result: TubeArrays, first, count, radii, t, scalar, n
     return out
 
 
-def _ordered(batched: dict[int, SurfaceMesh], single: dict[int, SurfaceMesh | None], total: int, options,
-             stem: str) -> list[SurfaceMesh]:
+def _ordered(batched: dict[int, SurfaceMesh], single: dict[int, SurfaceMesh | None]) -> list[SurfaceMesh]:
+    """Batched runs and per-chain meshes in chain order (a run is keyed by its first chain)."""
     keys = sorted(set(batched) | {k for k, m in single.items() if m is not None})
     return [batched[k] if k in batched else single[k] for k in keys]
