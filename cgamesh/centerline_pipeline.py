@@ -94,8 +94,15 @@ class _Chain:
 
 
 def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
-                     progress: Callable[[str], None] = lambda label: None) -> TubeMeshes:
-    """Tubes along every chain of ``lines`` with their junction and soma spheres (see the module)."""
+                     progress: Callable[..., None] = lambda label, count=1: None,
+                     batched: bool = True) -> TubeMeshes:
+    """Tubes along every chain of ``lines`` with their junction and soma spheres (see the module).
+
+    ``progress(label, count)`` after every ``count`` chains. ``batched``: mesh the chains in
+    one vectorised pass (cgamesh.meshing.batch_pass; same meshes within 1e-12 relative) where
+    the options allow it (a fixed resolution, no caps, not watertight); else, or when False,
+    one chain at a time.
+    """
     _check_options(lines, options)
     radii = _radii(lines, options)
     points = lines.points[:, [1, 2, 0]] if options.up == "x" else lines.points  # x up -> z up, a rotation
@@ -109,7 +116,18 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     pieces: list[SurfaceMesh] = []
     skipped: list[str] = []
     stem = _mesh_name(lines.source)
-    for index, chain in enumerate(chains):
+    if batched and uses_batched_pass(options):
+        from cgamesh.meshing.batch_pass.chains import tube_pieces
+
+        def single(chain, index, tangents_, segment_of_):
+            return _tube(chain, index, points, radii, soma, scalar, tangents_, segment_of_, lines, options, stem)
+
+        pieces, skipped = tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, options, stem,
+                                      _label_name, single, progress)
+        chains_loop = []
+    else:
+        chains_loop = chains
+    for index, chain in enumerate(chains_loop):
         try:
             piece = _tube(chain, index, points, radii, soma, scalar, tangents, segment_of, lines, options, stem)
         except CgameshError as error:
@@ -128,6 +146,12 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     return TubeMeshes(meshes=tuple(meshes), skipped=tuple(skipped), up=up, units=lines.units,
                       meters_per_unit=lines.meters_per_unit, chains=len(chains),
                       material=Material(color=(1.0, 1.0, 1.0)) if options.color_by != "none" else Material())
+
+
+def uses_batched_pass(options: TubeOptions) -> bool:
+    """Whether the batched pass covers these options (tolerance-driven rings, caps and the
+    watertight union are meshed one chain at a time)."""
+    return options.tolerance is None and not options.watertight and not options.caps
 
 
 def chain_count(lines: Centerlines) -> int:

@@ -22,8 +22,9 @@ class Progress:
         self.start = time.perf_counter()
         self.drawn = False
 
-    def advance(self, label: str = "") -> None:
-        self.done += 1
+    def advance(self, label: str = "", count: int = 1) -> None:
+        """``count`` more items done, the last of them ``label``."""
+        self.done += count
         if not self.enabled or time.perf_counter() - self.start < SILENT_SECONDS:
             return
         filled = WIDTH * self.done // self.total

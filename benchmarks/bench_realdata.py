@@ -1,0 +1,202 @@
+"""Real data, file to GLB, cgamesh against pyvista side by side (pyvista: a benchmark-only baseline).
+
+Each case runs as a whole process (read, mesh, write a GLB), cgamesh and pyvista interleaved,
+best of a few runs; every child's peak resident memory comes from its own rusage (os.wait4).
+Cases: dipy's fornix (tracks300.trk), the same streamlines repeated to a larger count, and
+navis' neurons, at 8 vertices around and 3 extra rings between nodes. pyvista's baselines:
+``Spline`` (the same rings per node) + ``tube``, and its plain polyline ``tube`` at one ring
+per node; both read the same chains (cgamesh's reader) and write a GLB with trimesh. Printed:
+time ratios, the per-surface overhead of the batched pass, and peak memory against the bytes
+of the mesh arrays written. Results are checked (vertex counts, finite arrays); times are
+printed, never asserted. The big-tube figures: ``python benchmarks/bench_tubes.py``.
+
+    python benchmarks/bench_realdata.py [--repeat 3] [--copies 10] [--neurons 3] [--blas-threads N] [--tiny]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+AROUND, SUBDIVIDE = 8, 3
+BLAS_THREADS = 0  # 0: the environment's setting (--blas-threads)
+
+# Each child prints its own peak resident memory (VmHWM, reset at exec) last: the rusage
+# ru_maxrss of a child also counts the parent's pages it was forked from.
+PEAK = """
+def peak_kb():
+    try:
+        for line in open('/proc/self/status'):
+            if line.startswith('VmHWM:'):
+                return int(line.split()[1])
+    except OSError:
+        pass
+    import resource
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+"""
+
+CGAMESH_CHILD = PEAK + """
+import sys
+from cgamesh_cli.main import main
+code = main([sys.argv[1], '-o', sys.argv[2], '--radius', sys.argv[3], '--around', '8', '--subdivide', '3', '-q'])
+print('PEAK_KB', peak_kb())
+sys.exit(code)
+"""
+
+PYVISTA_CHILD = PEAK + """
+import sys
+import numpy as np
+import pyvista as pv
+import trimesh
+from cgamesh.centerline_pipeline import _chains
+from cgamesh.inputs.centerlines import read_centerlines
+path, out, radius, mode = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
+lines = read_centerlines(path)
+chains, _ = _chains(lines)
+blocks = []
+for chain in chains:
+    p = lines.points[chain.nodes]
+    keep = np.concatenate([[True], np.any(p[1:] != p[:-1], axis=1)])
+    p = p[keep]
+    if len(p) < 2:
+        continue
+    line = pv.Spline(p, (len(p) - 1) * 4 + 1) if mode == 'spline' else pv.lines_from_points(p)
+    blocks.append(line.tube(radius=radius, n_sides=8, capping=False))
+mesh = pv.merge(blocks, merge_points=False).triangulate()  # no search for coincident points
+faces = mesh.faces.reshape(-1, 4)[:, 1:]
+trimesh.Trimesh(mesh.points, faces, vertex_normals=mesh.point_normals, process=False).export(out)
+print('PEAK_KB', peak_kb())
+"""
+
+
+def run_child(code: str, args: list[str]) -> tuple[float, float, float]:
+    """(wall seconds, CPU seconds (user + system, from its rusage), peak resident MB (its own
+    report)) of one child process: on a machine shared with other work CPU time is the steadier figure."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    if BLAS_THREADS:
+        env["OPENBLAS_NUM_THREADS"] = env["OMP_NUM_THREADS"] = str(BLAS_THREADS)
+    start = time.perf_counter()
+    child = subprocess.Popen([sys.executable, "-c", code, *args], stdout=subprocess.PIPE,
+                             stderr=subprocess.DEVNULL, env=env)
+    output = child.stdout.read().decode()
+    child.stdout.close()
+    _, status, usage = os.wait4(child.pid, 0)
+    seconds = time.perf_counter() - start
+    child.returncode = os.waitstatus_to_exitcode(status)
+    if child.returncode not in (0, 3):
+        raise SystemExit(f"child failed with exit status {child.returncode}: {args}")
+    peak = [int(line.split()[1]) for line in output.splitlines() if line.startswith("PEAK_KB")]
+    return seconds, usage.ru_utime + usage.ru_stime, peak[-1] / 1024.0
+
+
+def glb_vertices(path: Path) -> int:
+    """Vertex count of a GLB from its JSON chunk alone (the parent stays small: a child's
+    rusage would otherwise include the pages of the parent it was forked from)."""
+    import json
+    import struct
+
+    with open(path, "rb") as file:
+        file.read(12)
+        length, _ = struct.unpack("<II", file.read(8))
+        gltf = json.loads(file.read(length))
+    return sum(gltf["accessors"][p["attributes"]["POSITION"]]["count"] for m in gltf["meshes"] for p in m["primitives"])
+
+
+def repeated_tractogram(source: Path, copies: int, folder: Path) -> Path:
+    """The streamlines of ``source`` ``copies`` times, as .npz arrays (points, offsets)."""
+    from cgamesh.inputs.centerlines import read_centerlines
+
+    lines = read_centerlines(str(source))
+    count = len(lines.offsets) - 1
+    lengths = np.diff(lines.offsets)
+    points = np.concatenate([lines.points] * copies)
+    offsets = np.concatenate([[0], np.cumsum(np.tile(lengths, copies))])
+    path = folder / f"fornix_x{copies}.npz"
+    np.savez(path, points=points, offsets=offsets)
+    print(f"repeated tractogram: {count * copies} streamlines, {len(points)} points")
+    return path
+
+
+def case(name: str, path: Path, radius: float, repeat: int, folder: Path) -> dict:
+    """Interleaved runs of cgamesh, pyvista Spline+tube and pyvista tube; best wall and CPU times."""
+    wall = {"cgamesh": np.inf, "spline": np.inf, "tube": np.inf}
+    cpu = dict(wall)
+    memory = {key: 0.0 for key in wall}
+    outputs = {key: folder / f"{name}_{key}.glb" for key in wall}
+    for _ in range(repeat):
+        for key in wall:
+            code, extra = (CGAMESH_CHILD, []) if key == "cgamesh" else (PYVISTA_CHILD, [key])
+            seconds, processor, peak = run_child(code, [str(path), str(outputs[key]), str(radius), *extra])
+            wall[key], cpu[key] = min(wall[key], seconds), min(cpu[key], processor)
+            memory[key] = max(memory[key], peak)
+    ours, theirs = glb_vertices(outputs["cgamesh"]), glb_vertices(outputs["spline"])
+    assert ours > 0 and theirs > 0, (ours, theirs)
+    # cgamesh repeats the seam column ((around + 1) / around of pyvista's vertices on the same
+    # rings) and adds junction and soma spheres to neurons
+    assert ours / (AROUND + 1) >= 0.98 * theirs / AROUND, (name, ours, theirs)
+    if path.suffix != ".swc":
+        assert abs(ours / (AROUND + 1) - theirs / AROUND) <= 0.02 * theirs / AROUND + 2, (name, ours, theirs)
+    written = outputs["cgamesh"].stat().st_size / 2**20
+    print(f"{name:>14}: {ours} vertices; wall cgamesh {wall['cgamesh']:.2f} s, pyvista Spline+tube "
+          f"{wall['spline']:.2f} s ({wall['cgamesh'] / wall['spline']:.2f}x, target <= 1.0x), plain tube "
+          f"{wall['tube']:.2f} s ({wall['cgamesh'] / wall['tube']:.2f}x, target <= 3x)")
+    print(f"{'':>14}  CPU  cgamesh {cpu['cgamesh']:.2f} s, pyvista Spline+tube {cpu['spline']:.2f} s "
+          f"({cpu['cgamesh'] / cpu['spline']:.2f}x), plain tube {cpu['tube']:.2f} s "
+          f"({cpu['cgamesh'] / cpu['tube']:.2f}x)")
+    print(f"{'':>14}  peak memory cgamesh {memory['cgamesh']:.0f} MB for {written:.1f} MB written "
+          f"({memory['cgamesh'] / written:.1f}x, target <= 3x); pyvista Spline+tube {memory['spline']:.0f} MB")
+    return wall
+
+
+def per_surface_overhead(counts: list[int]) -> None:
+    """Time of N tiny tubes (2 nodes each) through the batched pass, over N."""
+    from cgamesh.api import tubes
+
+    rng = np.random.default_rng(1)
+    for n in counts:
+        polylines = [rng.normal(size=(2, 3)) * 10.0 for _ in range(n)]
+        start = time.perf_counter()
+        built = tubes(polylines, radii=0.5, units="mm")
+        seconds = time.perf_counter() - start
+        assert sum(m.vertex_count for m, _ in built.surfaces) == n * 5 * (AROUND + 1), "vertex count"
+        print(f"per-surface overhead, N = {n:>6}: {1e6 * seconds / n:.1f} us per surface (target < 50 us)")
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--copies", type=int, default=10, help="fornix copies (10 = 3,000 streamlines)")
+    parser.add_argument("--neurons", type=int, default=3)
+    parser.add_argument("--tiny", action="store_true", help="one run, small sizes (the CI test)")
+    parser.add_argument("--blas-threads", type=int, default=0,
+                        help="OPENBLAS_NUM_THREADS for every child (0: as the environment says); on a busy "
+                             "machine BLAS threads spin on cgamesh's many small matrix products")
+    args = parser.parse_args(argv)
+    global BLAS_THREADS
+    BLAS_THREADS = args.blas_threads
+    from realdata_files import fornix, neurons
+
+    repeat = 1 if args.tiny else args.repeat
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        case("fornix", fornix(), 0.5, repeat, folder)
+        if args.copies > 1:
+            case(f"fornix x{args.copies}", repeated_tractogram(fornix(), args.copies, folder), 0.5, repeat, folder)
+        for path in sorted(neurons(), key=lambda p: p.stat().st_size)[: args.neurons]:
+            case(path.stem, path, 40.0, repeat, folder)
+    per_surface_overhead([10, 100] if args.tiny else [100, 1000, 10000])
+    print("big-tube figures: python benchmarks/bench_tubes.py")
+
+
+if __name__ == "__main__":
+    main()

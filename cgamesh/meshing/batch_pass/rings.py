@@ -1,0 +1,263 @@
+"""Rings, normals, UVs and faces of many motor tubes at once (meshing.circles, batched).
+
+For every chain of ``ChainMotions`` the rings sit where the per-chain mesher puts them
+(``np.linspace(0, spans, along)``, reproduced with linspace's own arithmetic), are read out of
+the same circle blades (``motor_surface.circle_blades``, ``objects.circle_euclidean``) in the
+chain's local frame, carried by the same TRS rotations (a segmented Hillis-Steele scan whose
+products per ring are those of the per-chain scan), and get the same trigonometric normal
+field (``circles.RingNormals``, ``normals.unit_normals``), outward choice, faces and UVs.
+What the per-chain mesher repairs one chain at a time (stationary rings, folds, vanishing
+normals, an outward sum too close to zero to trust its estimate) marks the chain ``fallback``:
+the caller meshes it through the per-chain path.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cgamesh.geometry.algebra import products, rotors
+from cgamesh.meshing import normals as normal_field
+from cgamesh.meshing.batch_pass.motions import ChainMotions
+from cgamesh.meshing.circles import (E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION, OUTWARD_TRUST, STATIONARY_FRACTION,
+                                     RingNormals, orient_by_geometry)
+
+
+@dataclass(frozen=True)
+class _BladeRings:
+    """Circles of many rings in world units (what ``RingNormals.of`` reads): the circles read out of the circle blades, as the per-chain path reads them
+    (``CircleRings``: centre, normal and radius from C, velocity X . (C dC/dt)), a frame per ring."""
+
+    centre: np.ndarray
+    normal: np.ndarray
+    radius: np.ndarray
+    omega: np.ndarray
+    origin: np.ndarray
+    scale: np.ndarray
+
+    @classmethod
+    def of(cls, state, origin, scale) -> "_BladeRings":
+        from cgamesh.geometry.motor_surface import circle_blades
+        from cgamesh.geometry.objects import circle_euclidean
+
+        blades, derivatives = circle_blades(state)
+        centre, normal, radius = circle_euclidean(blades)
+        omega = products.geometric(blades, derivatives, (3,), (3,), (2,))
+        return cls(origin + scale[:, None] * centre, normal, scale * radius, omega, origin, scale)
+
+    def velocity(self, points: np.ndarray) -> np.ndarray:
+        from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
+        from cgamesh.geometry.algebra.layout import grade_indices
+
+        scale = self.scale[:, None, None]
+        local = (points - self.origin[:, None, :]) / scale
+        vector_map = products.right_operator("inner", self.omega, (1,), (2,), (1,))[1]
+        moved = up(local)[..., grade_indices(1)] @ vector_map
+        local_velocity = moved[..., EUCLIDEAN] - weight(moved)[..., None] * local
+        return scale * local_velocity
+
+
+
+@dataclass(frozen=True)
+class TubeArrays:
+    """The tubes of the chains not marked ``fallback``, chain after chain.
+
+    positions, normals (V, 3); uvs (V, 2); faces (F, 3) int64, indices local to each chain;
+    face_chain (F,), vertex_chain (V,) the chain of each face and vertex; ring_local (V,) the
+    ring index of each vertex within its chain; uv_lengths (C, 2) per chain (circumference,
+    length); fallback (C,) chains left to the per-chain path (they have no vertices here).
+    """
+
+    positions: np.ndarray
+    normals: np.ndarray
+    uvs: np.ndarray
+    faces: np.ndarray
+    face_chain: np.ndarray
+    vertex_chain: np.ndarray
+    ring_local: np.ndarray
+    uv_lengths: np.ndarray
+    fallback: np.ndarray
+
+
+def _linspace_parameters(spans: np.ndarray, along: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """t of every ring (``np.linspace(0, spans, along)`` per chain, bit for bit) and its chain."""
+    chain = np.repeat(np.arange(len(along)), along)
+    first = np.concatenate([[0], np.cumsum(along)[:-1]])
+    k = (np.arange(int(along.sum())) - first[chain]).astype(np.float64)
+    step = spans.astype(np.float64) / (along - 1)
+    t = k * step[chain]
+    t[first + along - 1] = spans
+    return t, chain
+
+
+def _segmented_prefix(steps: np.ndarray, local: np.ndarray) -> np.ndarray:
+    """``rotors.prefix_products(..., unit=True)`` within each chain: element k combines with
+    k - shift only when that lies in its chain, the same products in the same order."""
+    grades = rotors.EUCLIDEAN_ROTOR_BLADES
+    acc = np.array(steps, dtype=np.float64)
+    shift = 1
+    longest = int(local.max()) + 1 if len(local) else 0
+    while shift < longest:
+        target = np.flatnonzero(local >= shift)
+        acc[target] = products.geometric(acc[target], acc[target - shift], grades, grades, grades)
+        shift *= 2
+    return rotors.renormalise(acc, grades)
+
+
+def _padded_rows(first: np.ndarray, count: np.ndarray):
+    """Per-chain rows for row-wise numpy reductions, grouped by length class so
+    padding stays under 2x: yields (chains, local index grid (c, L) or -1, rows (c, L))."""
+    lengths_class = np.ceil(np.log2(np.maximum(count, 1))).astype(np.int64)
+    for cls in np.unique(lengths_class):
+        members = np.flatnonzero(lengths_class == cls)
+        width = int(count[members].max())
+        grid = first[members][:, None] + np.arange(width)[None, :]
+        valid = np.arange(width)[None, :] < count[members][:, None]
+        yield members, np.where(valid, grid, -1), valid
+
+
+def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, around: int,
+                subdivide: int) -> TubeArrays:
+    """Tubes of ``around`` vertices per ring and ``subdivide`` rings between nodes for every chain."""
+    nodes = motions.nodes
+    chains = len(nodes.count)
+    segments = nodes.count - 1
+    along = segments * (subdivide + 1) + 1
+    fallback = ~motions.certified
+    t, ring_chain = _linspace_parameters(segments, along)
+    ring_first = np.concatenate([[0], np.cumsum(along)[:-1]])
+    ring_local = np.arange(len(t)) - ring_first[ring_chain]
+    segment = np.clip(np.floor(t), 0, segments[ring_chain] - 1).astype(np.int64)
+    s = t - segment
+    state = motions.evaluate(nodes.span_first[ring_chain] + segment, s)
+    o, sc = origin[ring_chain], scale[ring_chain]
+    # Read out of the circle blades, as the per-chain path does: the motion's own centre,
+    # normal and point velocity are cheaper but round differently (normals up to 4e-10 apart
+    # where the normal field is nearly degenerate), and this pass reproduces that path.
+    rings = _BladeRings.of(state, o, sc)
+
+    # transported frames (circles.transported_frames, open chains)
+    is_first = ring_local == 0
+    previous = np.where(is_first, 0, np.arange(len(t)) - 1)
+    steps = np.empty((len(t), 32))
+    steps[is_first] = rotors.rotation_between(E3, rings.normal[is_first])
+    rest = ~is_first
+    steps[rest] = rotors.rotation_between(rings.normal[previous[rest]], rings.normal[rest])
+    accumulated = _segmented_prefix(steps, ring_local)
+    u = rotors.apply_to_euclidean(accumulated, np.broadcast_to(E1, rings.normal.shape))
+    u -= np.einsum("ki,ki->k", u, rings.normal)[:, None] * rings.normal
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    v = np.cross(rings.normal, u)
+
+    field = RingNormals.of(rings, u, v)
+    stationary = field.speed <= STATIONARY_FRACTION * rings.radius
+    fallback |= np.bincount(ring_chain[stationary], minlength=chains) > 0
+
+    theta = 2.0 * np.pi * np.arange(around + 1) / around
+    circle_basis = np.stack([np.ones_like(theta), np.cos(theta), np.sin(theta)], axis=1)
+    placement = np.stack([rings.centre, rings.radius[:, None] * u, rings.radius[:, None] * v], axis=1)
+    positions = normal_field.expand(placement, circle_basis)
+    normals, smallest, near_zero = normal_field.unit_normals(field.raw, theta, field.speed, NEAR_ZERO_FRACTION)
+    fallback |= np.bincount(ring_chain[near_zero[0]], minlength=chains) > 0
+
+    # circles._continuous_signs: only the sign-free case stays here
+    step = theta[1] - theta[0]
+    suspicious = smallest <= normal_field.derivative_bound(field.raw) * step
+    agreement = np.einsum("ksc,ksc->k", normal_field.unit_rows(field.sample_normals[:-1]),
+                          normal_field.unit_rows(field.sample_normals[1:])) / field.sample_normals.shape[1]
+    if np.any(suspicious):
+        near = np.flatnonzero(suspicious)
+        values = _frame_values(field.frame[near], theta, field.speed[near])
+        folds = normal_field.reversals(values)
+        fallback |= np.bincount(ring_chain[near[folds.any(axis=1)]], minlength=chains) > 0
+        row_of = np.full(len(t), -1)
+        row_of[near] = np.arange(len(near))
+        unit = normal_field.unit_rows(values)
+        pairs = np.flatnonzero((row_of[:-1] >= 0) & (row_of[1:] >= 0))
+        agreement[pairs] = np.einsum("kmc,kmc->k", unit[row_of[pairs]], unit[row_of[pairs + 1]]) / len(theta)
+    within = ring_chain[:-1] == ring_chain[1:]
+    fallback |= np.bincount(ring_chain[:-1][within & (agreement < -FOLD_AGREEMENT)], minlength=chains) > 0
+    examined = np.bincount(ring_chain[suspicious], minlength=chains) > 0
+
+    # circles._outward_sum: the seven-sample estimate, or the sum over every vertex
+    cosine = field.frame[..., 0] @ normal_field.trig_basis(normal_field.SAMPLE_ANGLES).T
+    cosine = cosine / np.linalg.norm(field.sample_normals, axis=-1)
+    estimate = np.bincount(ring_chain, weights=cosine.mean(axis=1) * rings.radius, minlength=chains)
+    radius_sum = np.bincount(ring_chain, weights=rings.radius, minlength=chains)
+    trusted = ~examined & (np.abs(estimate) >= OUTWARD_TRUST * radius_sum)
+    # a sum within rounding of the trust threshold could go either way: the per-chain path decides
+    fallback |= ~examined & (np.abs(np.abs(estimate) - OUTWARD_TRUST * radius_sum) <= 1e-9 * radius_sum)
+    outward = np.einsum("kmi,kmi->k", normals, positions - rings.centre[:, None, :])
+    full = np.bincount(ring_chain, weights=outward, minlength=chains)
+    total = np.where(trusted, estimate, full)
+    fallback |= np.abs(total) <= 1e-9 * radius_sum * (around + 1)  # a sign too close to call
+    flip = total < 0.0
+    flipped_rings = flip[ring_chain]
+    normals[flipped_rings] *= -1.0
+
+    positions[:, -1] = positions[:, 0]
+    normals[:, -1] = normals[:, 0]
+    columns = around + 1
+
+    # UVs (uv.along_lengths, normalised, mean_along) per chain, row-wise reductions
+    sample_steps = np.linalg.norm(np.diff(field.samples, axis=0), axis=-1).mean(axis=-1)
+    travelled = np.zeros(len(t))
+    circumference = np.zeros(chains)
+    length = np.zeros(chains)
+    ring_circ = 2.0 * np.pi * rings.radius
+    for members, grid, valid in _padded_rows(ring_first, along):
+        step_rows = np.where(valid[:, 1:], sample_steps[np.maximum(grid[:, 1:], 1) - 1], 0.0)
+        cumulative = np.concatenate([np.zeros((len(members), 1)), np.cumsum(step_rows, axis=1)], axis=1)
+        travelled[grid[valid]] = cumulative[valid]
+        last = cumulative[np.arange(len(members)), along[members] - 1]
+        length[members] = last
+        travelled_rows = cumulative
+        # uv.mean_along: numpy's pairwise sum depends on the row's length, so rows of one length at a time
+        for width in np.unique(along[members]):
+            same = np.flatnonzero(along[members] == width)
+            rows = grid[same, :width]
+            c = ring_circ[rows]
+            trapezoid = 0.5 * (c[:, 1:] + c[:, :-1]) * np.diff(travelled_rows[same, :width], axis=1)
+            circumference[members[same]] = np.sum(trapezoid, axis=1) / np.where(last[same] > 0.0, last[same], 1.0)
+    fallback |= ~(length > 0.0)
+    v_coordinate = travelled / np.where(length > 0.0, length, 1.0)[ring_chain]
+    uvs = np.empty((len(t), columns, 2))
+    uvs[:, :, 0] = np.linspace(0.0, 1.0, columns)[None, :]
+    uvs[:, :, 1] = v_coordinate[:, None]
+
+    # faces: circles._wound_grid per chain, local indices; strips by a turning ring by geometry
+    keep_ring = ~fallback[ring_chain]
+    pair = np.flatnonzero(keep_ring[:-1] & within)  # ring k and k + 1 of one kept chain
+    j = np.arange(columns - 1)
+    row = np.empty((columns - 1, 2, 3), dtype=np.int64)
+    row[:, 0, 0], row[:, 0, 1], row[:, 0, 2] = j, j + 1, j + columns
+    row[:, 1, 0], row[:, 1, 1], row[:, 1, 2] = j + 1, j + columns + 1, j + columns
+    faces = (row.reshape(1, -1, 3) + (ring_local[pair] * columns)[:, None, None])  # (P, 2 (columns-1), 3)
+    swap = flip[ring_chain[pair]]
+    faces[swap] = faces[swap][:, :, [0, 2, 1]]
+    face_chain = np.repeat(ring_chain[pair], 2 * (columns - 1))
+    faces = faces.reshape(-1, 3)
+
+    # vertices of the kept chains, chain after chain
+    kept_rings = np.flatnonzero(keep_ring)
+    positions = positions[kept_rings].reshape(-1, 3)
+    normals = normals[kept_rings].reshape(-1, 3)
+    uvs = uvs[kept_rings].reshape(-1, 2)
+    vertex_chain = np.repeat(ring_chain[kept_rings], columns)
+    vertex_ring = np.repeat(ring_local[kept_rings], columns)
+    strip = suspicious[pair] | suspicious[pair + 1]
+    if np.any(strip):
+        counts = np.bincount(vertex_chain, minlength=chains)
+        start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        global_faces = faces + start[face_chain][:, None]
+        oriented = orient_by_geometry(global_faces, positions, normals, np.repeat(strip, 2 * (columns - 1)))
+        faces = oriented - start[face_chain][:, None]
+    return TubeArrays(positions, normals, uvs, faces, face_chain, vertex_chain, vertex_ring,
+                      np.stack([circumference, np.where(length > 0.0, length, circumference)], axis=1), fallback)
+
+
+def _frame_values(frame: np.ndarray, theta: np.ndarray, speed: np.ndarray) -> np.ndarray:
+    from cgamesh.meshing.circles import _frame_values as values
+
+    return values(frame, theta, speed)

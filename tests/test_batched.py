@@ -1,0 +1,175 @@
+"""The batched meshing pass gives the per-chain path's meshes (cgamesh.meshing.batch_pass).
+
+Measured agreement (documented in docs/real-data.md): positions, UVs, faces, welds,
+attributes, colours computed from them and the skipped lines are bit for bit those of the
+per-chain path; normals (and the direction colours, made from node tangents) within 1e-12
+(measured: a few units in the last place, at most 7.3e-16, from the order in which BLAS
+sums the trigonometric fit of the normal field over arrays of different sizes).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+from cgamesh.inputs.centerlines import read_centerlines
+from realdata_files import fornix, smallest_neuron
+
+NORMAL_TOLERANCE = 1e-12
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def assert_same(lines, options: TubeOptions) -> None:
+    one = mesh_centerlines(lines, options, batched=False)
+    many = mesh_centerlines(lines, options, batched=True)
+    assert many.skipped == one.skipped
+    assert len(many.meshes) == len(one.meshes)
+    for a, b in zip(many.meshes, one.meshes):
+        assert a.name == b.name
+        np.testing.assert_array_equal(a.faces, b.faces)
+        np.testing.assert_array_equal(a.positions, b.positions)
+        np.testing.assert_array_equal(a.uvs, b.uvs)
+        np.testing.assert_array_equal(a.weld, b.weld)
+        np.testing.assert_array_equal(a.uv_lengths, b.uv_lengths)
+        assert np.abs(a.normals - b.normals).max() <= NORMAL_TOLERANCE
+        assert np.allclose(np.linalg.norm(a.normals, axis=1), 1.0, atol=1e-12)
+        assert (a.colors is None) == (b.colors is None)
+        if a.colors is not None:
+            assert np.abs(a.colors - b.colors).max() <= NORMAL_TOLERANCE
+        assert sorted(a.attributes) == sorted(b.attributes)
+        for key in a.attributes:
+            np.testing.assert_array_equal(a.attributes[key], b.attributes[key])
+
+
+@pytest.mark.parametrize("color_by", ["none", "radius", "direction", "segment"])
+@pytest.mark.parametrize("split", [False, True])
+def test_neuron_junctions_and_soma(color_by, split):
+    from dataclasses import replace
+
+    lines = read_centerlines(str(smallest_neuron()))
+    kinds = lines.kinds.copy()
+    kinds[np.flatnonzero(lines.parents < 0)] = 1  # the root a soma: its chains go the per-chain way
+    lines = replace(lines, kinds=kinds)
+    assert_same(lines, TubeOptions(color_by=color_by, split=split))
+
+
+@pytest.mark.parametrize("split", [False, True])
+def test_streamlines(split):
+    lines = read_centerlines(str(fornix()))
+    offsets = lines.offsets[:41]  # 40 streamlines keep the test short
+    from cgamesh.api import tubes
+
+    polylines = [lines.points[a:b] for a, b in zip(offsets[:-1], offsets[1:])]
+    assert tubes(polylines, radii=0.5, units="mm", split=split, color_by="direction").surfaces
+    sub = _polylines(polylines)
+    assert_same(sub, TubeOptions(radius=0.5, split=split, color_by="direction"))
+
+
+def _polylines(polylines, scalars=None):
+    from cgamesh.inputs.centerlines import Centerlines
+
+    points = np.concatenate(polylines)
+    offsets = np.concatenate([[0], np.cumsum([len(p) for p in polylines])])
+    return Centerlines(points=points, offsets=offsets, source="polylines", units="mm", scalars=scalars or {})
+
+
+def test_degenerate_chain_is_skipped_with_its_line():
+    good = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.5, 0.0]])
+    single_point = np.array([[5.0, 5.0, 5.0], [5.0, 5.0, 5.0]])  # one distinct point
+    lines = _polylines([good, single_point, good + 3.0])
+    assert_same(lines, TubeOptions(radius=0.2))
+    built = mesh_centerlines(lines, TubeOptions(radius=0.2))
+    assert len(built.skipped) == 1 and "streamline 1" in built.skipped[0]
+    with pytest.raises(Exception, match="streamline 1"):
+        mesh_centerlines(lines, TubeOptions(radius=0.2, strict=True))
+
+
+AXES = [np.array(v, dtype=float) for v in ([1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1])]
+
+
+@st.composite
+def polyline(draw):
+    count = draw(st.integers(2, 7))
+    steps = []
+    for _ in range(count - 1):
+        if draw(st.booleans()):
+            steps.append(AXES[draw(st.integers(0, 5))] * draw(st.sampled_from([0.0, 0.3, 1.0, 4.0])))
+        else:
+            steps.append(np.array(draw(st.lists(st.floats(-3.0, 3.0), min_size=3, max_size=3))))
+    start = np.array(draw(st.lists(st.floats(-100.0, 100.0), min_size=3, max_size=3)))
+    return start + np.concatenate([[np.zeros(3)], np.cumsum(steps, axis=0)])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(polyline(), min_size=1, max_size=6), st.sampled_from([0.05, 0.5, 2.0]),
+       st.sampled_from(["none", "direction", "radius"]), st.booleans())
+def test_random_polylines(polylines, radius, color_by, split):
+    """Orientations along exact +-axes, duplicate points (zero steps), 2-node chains, turns back."""
+    lines = _polylines(polylines)
+    try:
+        mesh_centerlines(lines, TubeOptions(radius=radius), batched=False)
+    except Exception:  # nothing meshable: both paths must refuse alike
+        with pytest.raises(Exception):
+            mesh_centerlines(lines, TubeOptions(radius=radius))
+        return
+    assert_same(lines, TubeOptions(radius=radius, color_by=color_by, split=split))
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(3, 40), st.integers(0, 2**31 - 1), st.booleans())
+def test_random_trees(count, seed, split):
+    """Trees with junctions: each node's parent is an earlier node."""
+    from cgamesh.inputs.centerlines import Centerlines
+
+    rng = np.random.default_rng(seed)
+    parents = np.array([-1] + [int(rng.integers(0, i)) for i in range(1, count)])
+    points = np.zeros((count, 3))
+    for i in range(1, count):
+        points[i] = points[parents[i]] + rng.choice([-1.0, 1.0]) * np.eye(3)[rng.integers(0, 3)] * rng.uniform(0.5, 3.0) \
+            + (rng.normal(size=3) if rng.random() < 0.5 else 0.0)
+    radii = rng.uniform(0.05, 0.4, size=count)
+    lines = Centerlines(points=points, parents=parents, radii=radii, source="tree", units="um")
+    assert_same(lines, TubeOptions(split=split, color_by="segment"))
+
+
+def test_progress_counts_every_chain_in_chunks():
+    from cgamesh.meshing.batch_pass import chains as batch_chains
+
+    lines = read_centerlines(str(smallest_neuron()))
+    calls = []
+    built = mesh_centerlines(lines, TubeOptions(), progress=lambda label, count=1: calls.append(count))
+    assert sum(calls) == built.chains
+    assert len(calls) < built.chains  # chunks, not one call per chain
+    assert max(calls) > 1 and batch_chains.CHUNK_RINGS > 0
+
+
+def test_progress_bar_draws_counts():
+    import io
+    import time
+
+    from cgamesh import progress as progress_module
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    stream = Terminal()
+    bar = progress_module.Progress(100, stream=stream)
+    bar.start = time.perf_counter() - 2.0  # past the silent first second
+    bar.advance("chains 1-40", 40)
+    bar.advance("chain 41", 1)
+    assert bar.done == 41 and "41/100" in stream.getvalue()
+
+
+def test_benchmark_runs_at_tiny_size():
+    result = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_realdata.py"), "--tiny", "--copies", "1",
+                             "--neurons", "1"], capture_output=True, text=True, timeout=900)
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "Spline+tube" in result.stdout and "CPU" in result.stdout and "per-surface overhead" in result.stdout
