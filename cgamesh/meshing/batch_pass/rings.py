@@ -25,6 +25,14 @@ from cgamesh.meshing.circles import (E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION,
 
 
 @dataclass(frozen=True)
+class _RingFrames:
+    """Each ring's working-frame scale, shaped (K, 1, 1) to divide a (K, n, 3) velocity, as
+    ``RingNormals.of`` divides by one surface's ``frame.scale``."""
+
+    scale: np.ndarray
+
+
+@dataclass(frozen=True)
 class _BladeRings:
     """Circles of many rings in world units (what ``RingNormals.of`` reads): the circles read out of the circle blades, as the per-chain path reads them
     (``CircleRings``: centre, normal and radius from C, velocity X . (C dC/dt)), a frame per ring."""
@@ -38,13 +46,17 @@ class _BladeRings:
 
     @classmethod
     def of(cls, state, origin, scale) -> "_BladeRings":
-        from cgamesh.geometry.motor_surface import circle_blades
+        from cgamesh.geometry.motor_surface import circle_blade_rates, circle_blades
         from cgamesh.geometry.objects import circle_euclidean
 
-        blades, derivatives = circle_blades(state)
+        blades, derivatives = circle_blades(state), circle_blade_rates(state)
         centre, normal, radius = circle_euclidean(blades)
         omega = products.geometric(blades, derivatives, (3,), (3,), (2,))
         return cls(origin + scale[:, None] * centre, normal, scale * radius, omega, origin, scale)
+
+    @property
+    def frame(self) -> _RingFrames:
+        return _RingFrames(self.scale[:, None, None])
 
     def velocity(self, points: np.ndarray) -> np.ndarray:
         from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
