@@ -43,12 +43,13 @@ def _kind(mode: int) -> str:
     return "not a regular file"
 
 
-def check_regular(path: str | os.PathLike, limit: int = MAX_FILE_BYTES) -> int:
+def check_regular(path: str | os.PathLike, limit: int = MAX_FILE_BYTES, label: str | None = None) -> int:
     """The size of ``path`` if it is a regular file within ``limit`` bytes (symlinks followed);
-    else UnreadableFileError. For libraries that open the file by name themselves."""
-    name = os.fsdecode(path)
+    else UnreadableFileError (naming ``label``, default the path). For libraries that open
+    the file by name themselves."""
+    name = label or os.fsdecode(path)
     try:
-        info = os.stat(name)
+        info = os.stat(os.fsdecode(path))
     except OSError as error:
         raise UnreadableFileError(f"{name}: cannot read: {error.strerror or error}") from None
     if not stat.S_ISREG(info.st_mode):

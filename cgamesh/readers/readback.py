@@ -32,8 +32,8 @@ def read_gltf(path: str | Path, world: bool = False, limit: int = MAX_FILE_BYTES
     """
     reader = GltfFile(path, limit)
     instances = {}
-    if world:
-        for instance in reader.instances():
+    for instance in reader.instances():  # checks the node graph even when its transforms are not used
+        if world:
             instances.setdefault(instance.mesh, instance)
     out = []
     for index in range(reader.mesh_count()):
@@ -121,7 +121,7 @@ def _check_usd_dependencies(root, name: str, limit: int) -> None:
         for reference in dependencies:
             label = f"{name}: the layer it composes"
             target = resolve_relative(folder, reference, label)
-            check_regular(target, limit)
+            check_regular(target, limit, f"{label} {reference!r}")
             key = str(target)
             if key in seen:
                 continue
