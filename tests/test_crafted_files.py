@@ -19,6 +19,7 @@ import resource
 import struct
 import subprocess
 import sys
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -210,6 +211,8 @@ case("doubleSided not a boolean")(lambda f: Base.write(f, "double.glb", lambda d
 
 # Values.
 case("NaN position")(lambda f: Base.write(f, "nanpos.glb", binary_edit=set_float(5 * 12, float("nan"))))
+case("signalling NaN position")(
+    lambda f: Base.write(f, "snan.glb", binary_edit=lambda b: bytes(b[:24] + struct.pack("<I", 0x7F800001) + b[28:])))
 case("infinite normal")(lambda f: Base.write(f, "infnormal.glb", binary_edit=set_float(336 + 12, float("inf"))))
 
 
@@ -417,3 +420,40 @@ def test_a_gltf_with_its_buffer_beside_it_reads_like_the_glb(corpus, tmp_path):
     a, b = read_gltf(gltf, world=True)[0], read_gltf(glb, world=True)[0]
     np.testing.assert_array_equal(a.positions, b.positions)
     np.testing.assert_array_equal(a.faces, b.faces)
+
+
+# --- random damage ----------------------------------------------------------------------------------
+
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(flips=st.lists(st.tuples(st.integers(0, 10**6), st.integers(0, 255)), min_size=1, max_size=8),
+       cut=st.one_of(st.none(), st.integers(0, 10**6)))
+def test_randomly_damaged_glbs_read_or_fail_with_one_line(flips, cut, corpus, tmp_path):
+    """Bytes overwritten anywhere (header, JSON, binary) and the file cut short: both readers
+    either read it or raise the one-line error, never anything else."""
+    from cgamesh.errors import CgameshError
+    from cgamesh.readers.readback import read_gltf
+    from cgamesh.tracer.meshfile import read_glb
+
+    data = bytearray(Base.data)
+    for where, value in flips:
+        data[where % len(data)] = value
+    if cut is not None:
+        data = data[:cut % len(data)]
+    path = tmp_path / "damaged.glb"
+    path.write_bytes(bytes(data))
+    for read in (lambda: read_gltf(path), lambda: read_gltf(path, world=True), lambda: read_glb(path, "z", 1.0)):
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")  # a warning would be a second line on stderr
+                meshes = read()
+        except CgameshError as error:
+            message = str(error)
+            assert "\n" not in message and str(path) in message, message
+        else:
+            for mesh in meshes:
+                assert np.isfinite(mesh.positions).all() and np.isfinite(mesh.normals).all()
+                assert len(mesh.faces) == 0 or 0 <= mesh.faces.min() <= mesh.faces.max() < len(mesh.positions)

@@ -262,7 +262,8 @@ class GltfFile:
         self._allocate(count * width * 8, here)
         raw = np.ndarray((count, width), dtype=dtype, buffer=data, offset=view_offset + offset,
                          strides=(stride, dtype.itemsize))
-        values = raw.astype(np.int64 if as_indices else np.float64)
+        with np.errstate(invalid="ignore"):  # a signalling NaN warns as it widens; it is refused below
+            values = raw.astype(np.int64 if as_indices else np.float64)
         if component == FLOAT:
             bad = ~np.isfinite(values)
             if bad.any():
