@@ -457,3 +457,22 @@ def test_randomly_damaged_glbs_read_or_fail_with_one_line(flips, cut, corpus, tm
             for mesh in meshes:
                 assert np.isfinite(mesh.positions).all() and np.isfinite(mesh.normals).all()
                 assert len(mesh.faces) == 0 or 0 <= mesh.faces.min() <= mesh.faces.max() < len(mesh.positions)
+
+
+@pytest.mark.parametrize("library", ["/dev/zero", "../outside.mtl", "pipe.mtl", "zero.mtl", "file:///etc/passwd"])
+def test_an_obj_naming_a_forbidden_material_file_reads_without_it(library, tmp_path):
+    """trimesh reads what an OBJ names through our resolver: nothing outside the folder, no
+    FIFO, no device; the material is then missing, which trimesh tolerates, and the mesh reads."""
+    from cgamesh.readers.readback import read_trimesh
+
+    folder = tmp_path / "inner"
+    folder.mkdir()
+    os.mkfifo(folder / "pipe.mtl")
+    os.symlink("/dev/zero", folder / "zero.mtl")
+    (tmp_path / "outside.mtl").write_text("newmtl a\nKd 1 0 0\n")
+    path = put(folder / "t.obj", f"mtllib {library}\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nusemtl a\nf 1//1 2//1 3//1\n")
+    result = run(["check", "-q", str(path)])
+    assert result.returncode == 0 and result.stderr == ""
+    mesh = read_trimesh(path)[0]
+    np.testing.assert_array_equal(mesh.faces, [[0, 1, 2]])
+    np.testing.assert_allclose(mesh.normals, [[0.0, 0.0, 1.0]] * 3)
