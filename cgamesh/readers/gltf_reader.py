@@ -7,8 +7,9 @@ used is checked before use, against the data actually there:
 
 - the file and every buffer it names go through ``readers.files`` (regular files inside the
   file's folder, base64 data URIs, bounded sizes); a GLB's header and chunk lengths must
-  match the file; the JSON must be an object with ``asset.version`` "2.0" (NaN and infinity
-  constants, invalid UTF-8 and nesting deeper than Python's parser allows are refused);
+  match the file; the JSON (at most MAX_JSON_BYTES) must be an object with ``asset.version``
+  "2.0" (NaN and infinity constants, invalid UTF-8 and nesting deeper than Python's parser
+  allows are refused);
 - an accessor's component type, type, count (>= 1), normalized flag and byte offset, its
   buffer view's buffer, offset, length and stride (4 to 252, a multiple of 4, at least one
   element), and offset + stride (count - 1) + element <= the view's length <= the buffer's;
@@ -49,6 +50,9 @@ INDEX_COMPONENTS = (5121, 5123, 5125)
 # integer types of KHR_mesh_quantization).
 ATTRIBUTES = {"POSITION": ("VEC3", (5126, 5120, 5121, 5122, 5123)), "NORMAL": ("VEC3", (5126, 5120, 5122)),
               "TEXCOORD_0": ("VEC2", (5126, 5120, 5121, 5122, 5123)), "TANGENT": ("VEC4", (5126, 5120, 5122))}
+# Largest JSON document parsed: a few kilobytes per surface in cgamesh's files; parsed JSON can
+# take 20 times its text in Python objects, so this bounds the parse to about 0.7 GiB.
+MAX_JSON_BYTES = 32 << 20
 # Relative slack when comparing an accessor's declared min / max with its data (writers round).
 MIN_MAX_RTOL = 1e-6
 
@@ -104,9 +108,9 @@ class GltfFile:
         self.folder = os.path.dirname(os.path.abspath(self.path))
         self.limit = limit
         self._allocated = 0
-        self._buffers: dict[int, bytes] = {}
+        self._buffers: dict[int, memoryview] = {}
         data = read_regular(self.path, limit)
-        self._bin: bytes | None = None
+        self._bin: memoryview | None = None
         if data[:4] == GLB_MAGIC:
             text = self._glb_chunks(data)
         elif self.path.lower().endswith(".glb"):
@@ -135,7 +139,7 @@ class GltfFile:
             size, kind = struct.unpack_from("<II", data, offset)
             if size > len(data) - offset - 8:
                 self.fail(f"the chunk at byte {offset} declares {size} bytes, only {len(data) - offset - 8} follow")
-            chunks.append((kind, data[offset + 8:offset + 8 + size]))
+            chunks.append((kind, memoryview(data)[offset + 8:offset + 8 + size]))  # views: no copies
             offset += 8 + size
         if not chunks or chunks[0][0] != GLB_JSON:
             self.fail("the first GLB chunk must be JSON")
@@ -143,9 +147,11 @@ class GltfFile:
             self._bin = chunks[1][1]
         return chunks[0][1]
 
-    def _parse(self, text: bytes) -> dict:
+    def _parse(self, text) -> dict:
+        if len(text) > MAX_JSON_BYTES:
+            self.fail(f"its JSON has {len(text)} bytes, more than the {MAX_JSON_BYTES} this reader parses")
         try:
-            document = json.loads(text.decode("utf-8"), parse_constant=_no_constants)
+            document = json.loads(bytes(text).decode("utf-8"), parse_constant=_no_constants)
         except UnicodeDecodeError as error:
             self.fail(f"the JSON is not UTF-8 (byte {error.start})")
         except RecursionError:
@@ -194,7 +200,7 @@ class GltfFile:
 
     # --- buffers and accessors ------------------------------------------------------------------
 
-    def buffer(self, index: int, where: str) -> bytes:
+    def buffer(self, index: int, where: str) -> memoryview:
         if index not in self._buffers:
             buffer = self.item("buffers", index, where)
             here = f"buffers[{index}]"
@@ -210,7 +216,7 @@ class GltfFile:
                 data = read_reference(self.folder, uri, self.limit, f"{self.path}: {here}.uri")
             if len(data) < declared:
                 self.fail(f"{here}.byteLength is {declared}, but its data has {len(data)} bytes")
-            self._buffers[index] = data[:declared]
+            self._buffers[index] = memoryview(data)[:declared]
         return self._buffers[index]
 
     def accessor(self, index, where: str, types: tuple[str, ...], components: tuple[int, ...],
