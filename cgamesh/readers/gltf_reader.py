@@ -268,14 +268,15 @@ class GltfFile:
         self._allocate(count * width * 8, here)
         raw = np.ndarray((count, width), dtype=dtype, buffer=data, offset=view_offset + offset,
                          strides=(stride, dtype.itemsize))
-        with np.errstate(invalid="ignore"):  # a signalling NaN warns as it widens; it is refused below
-            values = raw.astype(np.int64 if as_indices else np.float64)
         if component == FLOAT:
-            bad = ~np.isfinite(values)
-            if bad.any():
-                row = int(np.flatnonzero(bad.any(axis=1))[0])
-                self.fail(f"{here} ({where}) holds a non-finite value ({values[row][bad[row]][0]}) at element {row}")
-        self._check_bounds(accessor, here, values, width)
+            with np.errstate(invalid="ignore"):  # a signalling NaN sets the flag; it is refused here
+                finite = np.isfinite(raw)
+            if not finite.all():
+                row = int(np.flatnonzero(~finite.all(axis=1))[0])
+                self.fail(f"{here} ({where}) holds a non-finite value ({raw[row][~finite[row]][0]}) at element {row}")
+        self._check_bounds(accessor, here, raw, width)
+        with np.errstate(invalid="ignore"):
+            values = raw.astype(np.int64 if as_indices else np.float64)
         if normalized:
             bound = float(np.iinfo(dtype).max)
             values = np.maximum(values / bound, -1.0)
@@ -287,10 +288,12 @@ class GltfFile:
             self.fail(f"reading {here} would take the arrays past {self.limit} bytes; refused")
 
     def _check_bounds(self, accessor: dict, here: str, values: np.ndarray, width: int) -> None:
-        for key, actual in (("min", values.min(axis=0)), ("max", values.max(axis=0))):
+        """Declared min / max (raw component values) against the data's, where declared."""
+        for key, reduce in (("min", np.min), ("max", np.max)):
             declared = self.numbers(accessor, key, here, width)
             if declared is None:
                 continue
+            actual = reduce(values, axis=0).astype(np.float64)
             slack = MIN_MAX_RTOL * np.maximum(np.abs(declared), np.abs(actual)) + 1e-30
             if np.any(np.abs(declared - actual) > slack):
                 self.fail(f"{here}.{key} is {declared.tolist()}, but its data's is {actual.tolist()}")
