@@ -17,7 +17,10 @@ for circles P = (W+)^2 (W-)^2 = (A^2 + beta^2 B^2)^2 - 4 beta^2 (A . B)^2 with
 A = <L (s - F) C'>, B = <L C'> (eq. 16), of degree 12 d; for point pairs P = W+ W- =
 a^2 - beta^2 b^2 (eq. 31), of degree 6 d; d is the degree of C' in alpha (1 linear, N a
 Bezier curve of order N, also rational once its positive denominator is multiplied out,
-3 Kochanek-Bartels). P is evaluated as the product of its factors, which has no
+3 Kochanek-Bartels). A rational curve's denominator, multiplied out, scales P by its 12th
+power (circles): with weights from 1e-3 to 1e3 that spans more than float64 holds, so its
+segments are fitted in pieces over which the denominator changes by at most PIECE_RATIO
+(``pieces``). P is evaluated as the product of its factors, which has no
 cancellation (the expanded form loses all precision where F is small, since W- is then).
 W+ and W- are linear in L, so for a batch of rays they are one matrix product with matrices
 precomputed per segment at Chebyshev points, where P is fitted exactly; its roots are
