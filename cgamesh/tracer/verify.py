@@ -27,7 +27,9 @@ import numpy as np
 
 from cgamesh.errors import InvalidInputError
 from cgamesh.geometry.objects import circle_euclidean
+from cgamesh.tracer import cga
 from cgamesh.tracer.evolved import TracedSurface
+from cgamesh.tracer.surface_normals import euclidean_velocity, pair_fractions
 from cgamesh.tracer.rays import Rays
 
 # Defaults of the thresholds (cgamesh verify --max-angle / --max-distance / --max-missed).
@@ -264,9 +266,6 @@ def _regularity(surface: TracedSurface, points: np.ndarray, param: np.ndarray) -
     (the circle's tangent, the pair's ruling) and the velocity along t, and the speed |dx/dt|
     in world units; both 0 off the surface. The velocity is X . (C dC/dt) (eq. 20) for
     circles and (1 - s) a' + s b' for point pairs (``surface_normals``)."""
-    from cgamesh.tracer import cga
-    from cgamesh.tracer.surface_normals import euclidean_velocity, pair_fractions
-
     sine, speed = np.zeros(len(points)), np.zeros(len(points))
     on = np.isfinite(param) & (param >= 0.0)
     if not np.any(on):
