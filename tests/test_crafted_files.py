@@ -476,3 +476,46 @@ def test_an_obj_naming_a_forbidden_material_file_reads_without_it(library, tmp_p
     mesh = read_trimesh(path)[0]
     np.testing.assert_array_equal(mesh.faces, [[0, 1, 2]])
     np.testing.assert_allclose(mesh.normals, [[0.0, 0.0, 1.0]] * 3)
+
+
+@pytest.fixture(scope="module")
+def crate(tmp_path_factory):
+    """The example exported as a USD crate file (.usdc)."""
+    path = tmp_path_factory.mktemp("crate") / "base.usdc"
+    assert main([str(SCENE), "-o", str(path), "--around", "6", "--along", "4", "-q"]) == 0
+    return path.read_bytes()
+
+
+def test_damaged_crate_files_get_one_line(crate, tmp_path):
+    """usd-core aborts (SIGABRT) or stalls on some damaged crate files; the child process
+    that reads them takes the blow, and check still ends in one line."""
+    rng = np.random.default_rng(1)
+    for trial in range(12):
+        data = bytearray(crate)
+        for _ in range(rng.integers(1, 6)):
+            data[rng.integers(len(data))] = rng.integers(256)
+        path = put(tmp_path / f"damaged{trial}.usdc", bytes(data))
+        result = run(["check", "-q", str(path)])
+        assert "Traceback" not in result.stderr and result.returncode in (0, 2), result.stderr
+        if result.returncode == 2:
+            assert len(result.stderr.splitlines()) == 1 and path.name in result.stderr
+
+
+def test_a_usd_read_that_does_not_finish_is_one_line(crate, tmp_path, monkeypatch):
+    from cgamesh.readers import usd_sandbox
+
+    monkeypatch.setattr(usd_sandbox, "USD_SECONDS", 0.01)
+    path = put(tmp_path / "slow.usdc", crate)
+    with pytest.raises(usd_sandbox.UnreadableFileError, match="did not finish reading it within"):
+        usd_sandbox.read_usd(path)
+
+
+def test_a_usd_file_read_in_the_child_is_the_file(crate, tmp_path):
+    from cgamesh.readers.readback import read_usd, read_usd_here
+
+    path = put(tmp_path / "good.usdc", crate)
+    here, child = read_usd_here(path), read_usd(path)
+    assert [m.name for m in here] == [m.name for m in child]
+    for a, b in zip(here, child):
+        for field in ("positions", "normals", "uvs", "faces"):
+            np.testing.assert_array_equal(getattr(a, field), getattr(b, field))

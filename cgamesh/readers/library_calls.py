@@ -33,6 +33,15 @@ def first_line(text: str) -> str:
     return ""
 
 
+def _message(error: BaseException) -> str:
+    """str(error), which for usd-core's errors may itself fail (bytes of the file that are not
+    UTF-8 quoted in the message)."""
+    try:
+        return str(error)
+    except Exception:  # noqa: BLE001 (a message that cannot be formatted: the caller falls back)
+        return ""
+
+
 @contextmanager
 def quiet_library(label: str, library: str = "the reader") -> Iterator[None]:
     """Run the block with the library's diagnostics captured; an exception from it becomes
@@ -52,7 +61,7 @@ def quiet_library(label: str, library: str = "the reader") -> Iterator[None]:
         except (Exception, MemoryError, RecursionError) as error:  # noqa: B014 (named for the reader)
             sys.stderr.flush()
             captured.seek(0)
-            detail = first_line(str(error)) or first_line(captured.read(4096).decode("utf-8", "replace"))
+            detail = first_line(_message(error)) or first_line(captured.read(4096).decode("utf-8", "replace"))
             raise UnreadableFileError(f"{label}: {library} cannot read it: {detail or type(error).__name__}") from None
         finally:
             sys.stderr.flush()

@@ -71,8 +71,19 @@ MAX_USD_LAYERS = 64
 
 
 def read_usd(path: str | Path, limit: int = MAX_FILE_BYTES) -> list[SurfaceMesh]:
+    """``read_usd_here`` in a child process (``usd_sandbox``): a file that makes usd-core abort
+    or stall costs the child, and the user gets one line."""
+    from cgamesh.optional import require
+    from cgamesh.readers.usd_sandbox import read_usd as read_in_child
+
+    require("pxr", "usd", "reading USD")
+    check_regular(path, limit)
+    return read_in_child(path, limit)
+
+
+def read_usd_here(path: str | Path, limit: int = MAX_FILE_BYTES) -> list[SurfaceMesh]:
     """Every UsdGeom.Mesh of the stage, one stored vertex per triangle corner (USD's points
-    are welded; faceVarying normals and st differ per corner).
+    are welded; faceVarying normals and st differ per corner), read in this process.
 
     The file must be a regular file; every layer it composes (sublayers, references,
     payloads) must be one too, inside its folder (``readers.files``), before usd-core opens
@@ -146,6 +157,10 @@ def expand_usd_mesh(mesh, name: str = "", budget: list[int] | None = None) -> di
         points = mesh.GetPointsAttr().Get()
         counts = mesh.GetFaceVertexCountsAttr().Get()
         indices = mesh.GetFaceVertexIndicesAttr().Get()
+    sizes = [0 if array is None else len(array) for array in (points, counts, indices)]
+    if budget is not None and (3 * sizes[0] + sizes[1] + 9 * sizes[2]) * 8 > budget[0]:
+        raise UnreadableFileError(f"{where}: {sizes[0]} points, {sizes[1]} faces and {sizes[2]} indices would take "
+                                  "the arrays past the reader's limit; refused")
     points = np.zeros((0, 3)) if points is None else np.asarray(points, dtype=np.float64).reshape(-1, 3)
     counts = np.zeros(0, dtype=np.int64) if counts is None else np.asarray(counts, dtype=np.int64).ravel()
     indices = np.zeros(0, dtype=np.int64) if indices is None else np.asarray(indices, dtype=np.int64).ravel()
