@@ -12,6 +12,8 @@ similarity transforms the exporters use):
   holes, connected components;
 - self-intersections (pymeshlab): triangles crossing a triangle they share no vertex with
   (a tube whose radius exceeds its bend radius folds through itself);
+- normals that are not unit (zero, or a length off 1 by more than NORMAL_LENGTH_SLACK: int8
+  quantisation stays within it), refused by default;
 - normal consistency: the angle between each stored normal and the area-weighted normal of the
   triangles around it (vertices at the same point with the same normal pooled, so a UV seam
   sees its whole fan while a crease, such as a cap's rim, keeps its sides apart): max, mean,
@@ -38,6 +40,9 @@ from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.weld import weld_by_position
 
 DEGENERATE_FRACTION = 1e-12
+# A stored normal whose length is off 1 by more than this is not a unit normal (glTF requires
+# unit normals; normalized int8 ones are within about 0.014 of 1).
+NORMAL_LENGTH_SLACK = 0.02
 
 
 @dataclass(frozen=True)
@@ -55,6 +60,7 @@ class Thresholds:
     non_manifold_vertices: int | None = 0
     self_intersecting_triangles: int | None = 0
     flipped_normals: int | None = 0
+    non_unit_normals: int | None = 0
     max_normal_deviation_degrees: float | None = None
     uv_flips: int | None = None
     min_angle_degrees: float | None = None
@@ -80,6 +86,7 @@ class SurfaceReport:
     flipped_normals: int | None
     uv_flips: int | None
     uv_triangles: int
+    non_unit_normals: int | None = None
 
     def failures(self, limits: Thresholds) -> list[str]:
         out = []
@@ -93,6 +100,7 @@ class SurfaceReport:
         over("non-manifold vertices", self.non_manifold_vertices, limits.non_manifold_vertices)
         over("self-intersecting triangles", self.self_intersecting_triangles, limits.self_intersecting_triangles)
         over("flipped normals", self.flipped_normals, limits.flipped_normals)
+        over("zero or non-unit normals", self.non_unit_normals, limits.non_unit_normals)
         if self.normal_deviation_degrees is not None:
             over("normal deviation (degrees)", self.normal_deviation_degrees["max"],
                  limits.max_normal_deviation_degrees)
@@ -145,6 +153,7 @@ class Report:
             [("-" if s.normal_deviation_degrees is None else
               "{mean:.3g} / {p99:.3g} / {max:.3g}".format(**s.normal_deviation_degrees)) for s in ss])
         add("flipped normals", ["-" if s.flipped_normals is None else str(s.flipped_normals) for s in ss])
+        add("zero or non-unit normals", ["-" if s.non_unit_normals is None else str(s.non_unit_normals) for s in ss])
         add("UV flips", ["-" if s.uv_flips is None else f"{s.uv_flips} of {s.uv_triangles}" for s in ss])
         width = max(len(label) for label, _ in rows)
         columns = [max(len(row[1][i]) for row in rows) for i in range(len(ss))]
@@ -203,6 +212,7 @@ def surface_report(mesh: SurfaceMesh) -> SurfaceReport:
         flipped_normals=flipped,
         uv_flips=int(((uv_area < 0.0) & has_uv).sum()) if has_uv.any() else None,
         uv_triangles=int(has_uv.sum()),
+        non_unit_normals=_non_unit_normals(mesh),
     )
 
 
@@ -237,10 +247,20 @@ def _meshlab(points: np.ndarray, faces: np.ndarray) -> tuple[dict, int]:
     return topology, int(meshes.current_mesh().selected_face_number())
 
 
+def _non_unit_normals(mesh: SurfaceMesh) -> int | None:
+    """How many stored normals are zero or not of unit length; None when the mesh has none."""
+    normals = np.asarray(mesh.normals, dtype=np.float64)
+    if normals.shape != mesh.positions.shape:
+        return None
+    size = np.linalg.norm(normals, axis=1)
+    return int(np.count_nonzero(~(np.abs(size - 1.0) <= NORMAL_LENGTH_SLACK)))
+
+
 def _normal_consistency(mesh: SurfaceMesh, weld: np.ndarray, faces: np.ndarray, cross: np.ndarray):
     normals = np.asarray(mesh.normals, dtype=np.float64)
     if normals.shape != mesh.positions.shape or not np.isfinite(normals).all():
         return None, None
+    lengths = np.linalg.norm(normals, axis=1)
     key = np.concatenate([weld[:, None].astype(np.float64), np.round(normals, 6) + 0.0], axis=1)
     _, group = np.unique(key, axis=0, return_inverse=True)
     group = group.ravel()
@@ -249,8 +269,8 @@ def _normal_consistency(mesh: SurfaceMesh, weld: np.ndarray, faces: np.ndarray, 
         np.add.at(summed, group[faces[:, corner]], cross)  # |cross| = 2 area: area-weighted
     reference = summed[group]
     size = np.linalg.norm(reference, axis=1)
-    used = size > 0.0
-    cos = np.einsum("ij,ij->i", reference[used], normals[used]) / (size[used] * np.linalg.norm(normals[used], axis=1))
+    used = (size > 0.0) & (lengths > 0.0)  # a zero normal has no direction (counted by _non_unit_normals)
+    cos = np.einsum("ij,ij->i", reference[used], normals[used]) / (size[used] * lengths[used])
     angle = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
     if angle.size == 0:
         return None, None
@@ -275,10 +295,11 @@ def load_meshes(path: str | Path) -> list[SurfaceMesh]:
     STL carries no vertex normals (normals are then the face normals, and not judged), OBJ /
     PLY / STL no names beyond the file's.
     """
+    from cgamesh.readers.files import check_regular
+
     path = Path(path)
     suffix = path.suffix.lower()
-    if not path.is_file():
-        raise InvalidInputError(f"{path}: no such file")
+    check_regular(path)  # a missing file, a folder, a FIFO or a device: one line, before any reader
     if suffix in (".glb", ".gltf"):
         from cgamesh.readers.readback import read_gltf
 

@@ -48,3 +48,14 @@ def add_budget_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-memory", type=memory_size, metavar="SIZE",
                         help=f"refuse (or stream) work needing more memory than this, e.g. 2G or 512MiB "
                              f"(default {DEFAULT_FRACTION:g} of the memory available)")
+
+
+def finite_number(text: str) -> float:
+    """An argparse type accepting finite numbers (a NaN threshold would silently judge nothing)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not abs(value) < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text}")
+    return value

@@ -16,8 +16,8 @@ def _non_negative(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value >= 0.0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text}")
+    if not 0.0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text}")
     return value
 
 
@@ -31,7 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "threshold is broken.",
     )
     parser.add_argument("scene", help="the YAML scene file the mesh was made from")
-    parser.add_argument("mesh", help="the exported mesh: .glb")
+    parser.add_argument("mesh", help="the exported mesh: .glb or .gltf")
     parser.add_argument("--image", metavar="DIFF.png",
                         help="also write traced | mesh | difference images of the surfaces side by side")
     parser.add_argument("--size", type=image_size, default=(320, 240),
@@ -62,8 +62,8 @@ def run(args: argparse.Namespace) -> int:
     from cgamesh.tracer.png import write_png
     from cgamesh.tracer.world import build_world
 
-    if Path(args.mesh).suffix.lower() != ".glb":
-        raise InvalidInputError(f"{args.mesh}: expected a .glb mesh file")
+    if Path(args.mesh).suffix.lower() not in (".glb", ".gltf"):
+        raise InvalidInputError(f"{args.mesh}: expected a .glb or .gltf mesh file")
     if args.image and Path(args.image).suffix.lower() != ".png":
         raise InvalidInputError(f"{args.image}: expected a .png image file")
     scene = load_scene(args.scene)

@@ -319,6 +319,99 @@ def test_large_meshes_keep_their_indices_in_usd_and_ply(tmp_path):
     np.testing.assert_allclose(got.colors, mesh.colors[corners], atol=1e-7)
 
 
+
+# --- the distrustful readers check the channels like every other array ------------------------------
+
+def _glb_parts(path: Path) -> tuple[dict, bytes]:
+    import struct
+
+    data = path.read_bytes()
+    length = struct.unpack_from("<I", data, 12)[0]
+    size = struct.unpack_from("<I", data, 20 + length)[0]
+    return json.loads(data[20:20 + length]), data[28 + length:28 + length + size]
+
+
+def _glb(document: dict, binary: bytes) -> bytes:
+    import struct
+
+    text = json.dumps(document).encode()
+    text += b" " * (-len(text) % 4)
+    binary += b"\0" * (-len(binary) % 4)
+    body = struct.pack("<II", len(text), 0x4E4F534A) + text + struct.pack("<II", len(binary), 0x004E4942) + binary
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body
+
+
+def _break_channels(document: dict, binary: bytearray, how: str) -> None:
+    attributes = document["meshes"][0]["primitives"][0]["attributes"]
+    color = document["accessors"][attributes["COLOR_0"]]
+    radius = document["accessors"][attributes["_RADIUS"]]
+    if how == "colour count":
+        color["count"] -= 1
+        color.pop("min", None), color.pop("max", None)
+    elif how == "colour past its view":
+        color["byteOffset"] = color.get("byteOffset", 0) + 4 * document["bufferViews"][color["bufferView"]]["byteLength"]
+    elif how == "unnormalized colour":
+        color["componentType"], color["normalized"] = 5121, False
+    elif how == "nan attribute":
+        view = document["bufferViews"][radius["bufferView"]]
+        at = view.get("byteOffset", 0) + radius.get("byteOffset", 0) + 4 * int(view.get("byteStride", 4) // 4) * 3
+        binary[at:at + 4] = np.float32(np.nan).tobytes()
+        radius.pop("min", None), radius.pop("max", None)
+    elif how == "attribute names clash":
+        attributes["_Radius"] = attributes["_RADIUS"]
+    elif how == "attribute accessor out of range":
+        attributes["_RADIUS"] = len(document["accessors"])
+
+
+@pytest.mark.parametrize("how, message", [
+    ("colour count", "COLOR_0 has .* elements, POSITION has"),
+    ("colour past its view", r"attributes\.COLOR_0|needs .* bytes"),
+    ("unnormalized colour", "COLOR_0.* must be float or normalized"),
+    ("nan attribute", r"_RADIUS\) holds a non-finite value"),
+    ("attribute names clash", "are both attribute 'radius'"),
+    ("attribute accessor out of range", r"attributes\._RADIUS must be an index into accessors"),
+])
+def test_malformed_channels_are_one_line_errors(coloured, tmp_path, how, message):
+    from cgamesh.readers.files import UnreadableFileError
+
+    scene, meshes = coloured
+    document, binary = _glb_parts(_write(tmp_path / "tube.glb", scene, meshes))
+    binary = bytearray(binary)
+    _break_channels(document, binary, how)
+    path = tmp_path / "broken.glb"
+    path.write_bytes(_glb(document, bytes(binary)))
+    with pytest.raises(UnreadableFileError, match=message) as error:
+        read_gltf(path)
+    assert "\n" not in str(error.value) and str(path) in str(error.value)
+
+
+def test_a_usd_colour_primvar_of_the_wrong_count_is_one_line(coloured, tmp_path):
+    from export_checks import pxr_or_skip
+
+    pxr_or_skip()
+    from pxr import Usd, UsdGeom
+
+    from cgamesh.readers.files import UnreadableFileError
+
+    scene, meshes = coloured
+    path = _write(tmp_path / "tube.usda", scene, meshes)
+    stage = Usd.Stage.Open(str(path))
+    prim = stage.GetDefaultPrim().GetChild(meshes[0][0].name)
+    primvar = UsdGeom.PrimvarsAPI(prim).GetPrimvar("displayColor")
+    primvar.Set(primvar.Get()[:5])
+    radius = UsdGeom.PrimvarsAPI(prim).GetPrimvar("radius")
+    stage.GetRootLayer().Save()
+    with pytest.raises(UnreadableFileError, match="primvars:displayColor .* has 5 values, needs"):
+        read_usd(path)
+    primvar.Set(meshes[0][0].colors.tolist())  # back to whole: now a NaN in a float primvar
+    values = list(radius.Get())
+    values[2] = float("nan")
+    radius.Set(values)
+    stage.GetRootLayer().Save()
+    with pytest.raises(UnreadableFileError, match=r"primvars:radius\[2\] is not finite"):
+        read_usd(path)
+
+
 def strip(count: int) -> SurfaceMesh:
     """A flat zigzag strip of ``count`` vertices (alternately on two rows) with colours and an
     attribute, wound counter-clockwise seen from +z."""

@@ -123,7 +123,7 @@ class TracedSurface:
     def polynomial_degree(self, segment: int) -> int:
         """Degree of the intersection polynomial solved on a segment (after the known roots of W-
         are divided out): 8 for linear circles, 4 for linear point pairs (see the module doc)."""
-        return self.roots.polynomial(segment).degree
+        return self.roots.polynomial_degree(segment)
 
     def known_roots(self, segment: int) -> np.ndarray:
         """Parameters t in [segment, segment + 1] where W- vanishes for every ray (divided out)."""
@@ -242,11 +242,12 @@ class TracedSurface:
 
     # --- normals and reflections -----------------------------------------------------------------
 
-    def normals(self, points: np.ndarray, param: np.ndarray) -> np.ndarray:
+    def normals(self, points: np.ndarray, param: np.ndarray, side: float = 0.0) -> np.ndarray:
         """Analytic unit normals (either side) at world points (K, 3) with parameters (K,).
 
-        Where the analytic normal vanishes (a fold or pinch of the surface) the numerical
-        one is used; on a cap, the cap's normal.
+        Where the analytic normal vanishes (a fold or pinch of the surface, or a joint where
+        the curve stops) the numerical one is used, from central differences or, with
+        ``side`` -1 / +1, one-sided ones from below / above; on a cap, the cap's normal.
         """
         out = np.zeros(points.shape)
         surface = param >= 0.0
@@ -254,7 +255,7 @@ class TracedSurface:
             out[surface] = self._analytic(points[surface], param[surface])
             zero = surface & ~(np.linalg.norm(out, axis=1) > 0.5)
             if np.any(zero):
-                out[zero] = self.numerical_normals(points[zero], param[zero])
+                out[zero] = self.numerical_normals(points[zero], param[zero], side)
         for cap, label in zip(self.caps, (START_CAP, END_CAP)):
             on = param == label
             out[on] = cap.normals(points[on], param[on])
@@ -267,10 +268,10 @@ class TracedSurface:
             return surface_normals.circle_normals(projection.blades, projection.derivatives, local)
         return surface_normals.pair_normals(projection.blades, projection.derivatives, local)
 
-    def numerical_normals(self, points: np.ndarray, t: np.ndarray) -> np.ndarray:
+    def numerical_normals(self, points: np.ndarray, t: np.ndarray, side: float = 0.0) -> np.ndarray:
         """The second opinion: normals from the neighbouring objects (see ``surface_normals``)."""
         return surface_normals.numerical_normals(self.surface.sample, self.grade, t,
-                                                 self.frame.to_local(points), self.end)
+                                                 self.frame.to_local(points), self.end, side)
 
     def reflect(self, rays: Rays, points: np.ndarray, param: np.ndarray) -> np.ndarray:
         """L' = -N L N with N the normalised normal line through the hit (a half turn about N

@@ -17,7 +17,10 @@ for circles P = (W+)^2 (W-)^2 = (A^2 + beta^2 B^2)^2 - 4 beta^2 (A . B)^2 with
 A = <L (s - F) C'>, B = <L C'> (eq. 16), of degree 12 d; for point pairs P = W+ W- =
 a^2 - beta^2 b^2 (eq. 31), of degree 6 d; d is the degree of C' in alpha (1 linear, N a
 Bezier curve of order N, also rational once its positive denominator is multiplied out,
-3 Kochanek-Bartels). P is evaluated as the product of its factors, which has no
+3 Kochanek-Bartels). A rational curve's denominator, multiplied out, scales P by its 12th
+power (circles): with weights from 1e-3 to 1e3 that spans more than float64 holds, so its
+segments are fitted in pieces over which the denominator changes by at most PIECE_RATIO
+(``pieces``). P is evaluated as the product of its factors, which has no
 cancellation (the expanded form loses all precision where F is small, since W- is then).
 W+ and W- are linear in L, so for a batch of rays they are one matrix product with matrices
 precomputed per segment at Chebyshev points, where P is fitted exactly; its roots are
@@ -85,8 +88,19 @@ REFINE_STEPS = 3
 MOTOR_NEWTON_STEPS = 6
 # Degree of the Chebyshev proxy of (L v C)^2 on a motor segment.
 MOTOR_PROXY_DEGREE = 32
-# |F| below this fraction of its largest on a segment is a zero of W- for every ray.
+# |F| below this fraction of its largest on a segment may be a zero of W- for every ray ...
 STRUCTURAL_RTOL = 1e-9
+# ... and is one when, after Gauss-Newton steps towards the least |F|, |F| is below this fraction
+# of the scalar part s of Sigma there (the size of Sigma's terms, at any scale of C'): a true
+# zero computes to rounding, about 1e-16 s.
+STRUCTURAL_LOCAL_RTOL = 1e-13
+STRUCTURAL_STEPS = 4
+STRUCTURAL_STEP = 1e-7
+# A rational curve's interpolant, its denominator multiplied out, is fitted on pieces of a
+# segment over which the denominator changes by at most this factor: P grows as its 12th power
+# (circles), so one fit over weights from 1e-3 to 1e3 would lose the light end to rounding.
+PIECE_RATIO = 2.0
+MAX_PIECES = 256
 
 
 @dataclass(frozen=True)
@@ -180,6 +194,7 @@ class SurfaceRoots:
         self.degree = None if self.motor else interpolant_degree(surface.curve)
         self._polynomials: dict[int, _Polynomial] = {}
         self._known: dict[int, np.ndarray] = {}
+        self._pieces: dict[int, list[tuple[float, float]]] = {}
         self._samples: dict[tuple[int, int], _Samples] = {}
 
     def interpolant(self, t: np.ndarray) -> np.ndarray:
@@ -197,48 +212,97 @@ class SurfaceRoots:
         sigma = -cga.product(interpolant, products.reverse(interpolant), (g,), (g,), (0, 4))
         return interpolant, sigma
 
-    def structural_zeros(self, segment: int) -> np.ndarray:
-        """u in [-1, 1] where F (so W- for every ray) vanishes: the segment's ends (its controls
-        are blades) and any interior place where the interpolant passes through a blade.
+    def pieces(self, segment: int) -> list[tuple[float, float]]:
+        """[t0, t1] pieces covering the segment, each fitted apart: the whole segment, except for
+        a rational curve whose denominator changes by more than PIECE_RATIO over it, which is
+        halved until each piece's does not (sampled at 17 points per piece)."""
+        if segment not in self._pieces:
+            curve = self.surface.curve
+            out, todo = [], [(float(segment), float(segment + 1))]
+            while todo:
+                a, b = todo.pop()
+                if isinstance(curve, RationalBezier) and len(out) + len(todo) < MAX_PIECES:
+                    d = bernstein(curve.control_count - 1, np.linspace(a, b, 17) - segment) @ np.asarray(curve.weights)
+                    if d.max() > PIECE_RATIO * d.min():
+                        middle = 0.5 * (a + b)
+                        todo.extend([(middle, b), (a, middle)])
+                        continue
+                out.append((a, b))
+            self._pieces[segment] = out
+        return self._pieces[segment]
+
+    def structural_zeros(self, segment: int, piece: tuple[float, float] | None = None) -> np.ndarray:
+        """u in [-1, 1] over the piece (default: the whole segment) where F (so W- for every
+        ray) vanishes: the segment's ends (its controls are blades) and any interior place
+        where the interpolant passes through a blade.
 
         |F|^2 (coefficient norm) is a polynomial of degree 4 d, fitted exactly; its zeros are
-        double roots, found among the roots of its derivative and kept where |F| is below
-        STRUCTURAL_RTOL of its largest value on the segment.
+        double roots, found among the roots of its derivative. A candidate is kept only where
+        F truly vanishes: below STRUCTURAL_RTOL of its largest value on the segment, and,
+        after Gauss-Newton steps to the least |F| nearby, below STRUCTURAL_LOCAL_RTOL of Sigma's
+        scalar part there. The local test matters where the curve's scale varies: a rational
+        curve with weights 1e3 and 1e-3 is a blade to 1e-11 of its size for a stretch near an
+        end, and dividing P by a zero it does not have puts its roots out by the surface's width.
         """
+        a, b = piece if piece is not None else (float(segment), float(segment + 1))
+        at = lambda u: a + 0.5 * (b - a) * (u + 1.0)  # noqa: E731
         degree = 4 * self.degree
         u = chebyshev.nodes(degree)
-        _, sigma = self.four_vector(segment + 0.5 * (u + 1.0))
+        _, sigma = self.four_vector(at(u))
         size = np.einsum("mi,mi->m", sigma[:, cga.GRADE_BLADES[4]], sigma[:, cga.GRADE_BLADES[4]])
         series = chebyshev.coefficients(size[None, :])[0]
         critical = chebyshev.roots(np.polynomial.chebyshev.chebder(series)[None, :])[0]
         critical = critical[~np.isnan(critical)]
-        zeros = [-1.0, 1.0]
+        zeros = [u for u, end in ((-1.0, a), (1.0, b)) if end in (segment, segment + 1)]
         if critical.size:
-            _, at_critical = self.four_vector(segment + 0.5 * (critical + 1.0))
+            _, at_critical = self.four_vector(at(critical))
             norm = np.linalg.norm(at_critical[:, cga.GRADE_BLADES[4]], axis=1)
-            for z in critical[norm <= STRUCTURAL_RTOL * np.sqrt(size.max())]:
+            small = critical[norm <= STRUCTURAL_RTOL * np.sqrt(size.max())]
+            refined, relative = self._least_four_vector(at, small)
+            for z in refined[relative <= STRUCTURAL_LOCAL_RTOL]:
                 if all(abs(z - known) > 1e-6 for known in zeros):
                     zeros.append(float(z))
         return np.array(zeros)
 
-    def polynomial(self, segment: int) -> _Polynomial:
-        """The segment's intersection polynomial, as matrices giving its factors at fitting points."""
-        if segment not in self._polynomials:
+    def _least_four_vector(self, at, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Gauss-Newton steps from u (k,) towards the least |F| nearby (F' by central differences);
+        returns the refined u and |F| / |s| there."""
+        four = cga.GRADE_BLADES[4]
+        for _ in range(STRUCTURAL_STEPS):
+            if u.size == 0:
+                break
+            t = at(np.concatenate([u, u - STRUCTURAL_STEP, u + STRUCTURAL_STEP]))
+            _, sigma = self.four_vector(t)
+            f, low, high = np.split(sigma[:, four], 3)
+            rate = (high - low) / (2.0 * STRUCTURAL_STEP)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                step = np.einsum("ki,ki->k", f, rate) / np.einsum("ki,ki->k", rate, rate)
+            u = np.clip(u - np.nan_to_num(step, posinf=0.0, neginf=0.0), -1.0, 1.0)
+        _, sigma = self.four_vector(at(u))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            relative = np.linalg.norm(sigma[:, four], axis=1) / np.abs(sigma[:, 0])
+        return u, np.nan_to_num(relative, nan=np.inf)
+
+    def polynomial(self, segment: int, piece: tuple[float, float] | None = None) -> _Polynomial:
+        """The intersection polynomial over a piece of a segment (default: its first), as
+        matrices giving its factors at fitting points."""
+        piece = self.pieces(segment)[0] if piece is None else piece
+        if piece not in self._polynomials:
             g = self.grade
             free = self.surface.four_vector_free
             degree = (1 if free else 6) * (2 if g == 3 else 1) * self.degree
             multiplicity = 2 if g == 3 else 1
-            zeros = np.zeros(0) if free else self.structural_zeros(segment)
+            zeros = np.zeros(0) if free else self.structural_zeros(segment, piece)
             degree -= multiplicity * zeros.size  # the roots of W- known for every ray
             # Points where P is fitted, away from the known roots it is divided by.
             for shift in (0.0, 0.25, -0.25, 0.125):
                 u, fit = chebyshev.shifted_nodes(degree, shift)
                 if zeros.size == 0 or np.abs(u[:, None] - zeros[None, :]).min() > 1e-3:
                     break
-            interpolant, sigma = self.four_vector(segment + 0.5 * (u + 1.0))
+            interpolant, sigma = self.four_vector(piece[0] + 0.5 * (piece[1] - piece[0]) * (u + 1.0))
             divisor = np.prod((u[:, None] - zeros[None, :]) ** multiplicity, axis=1)
             if free:
-                self._polynomials[segment] = _Polynomial(degree, meet_matrix(interpolant, g), None, divisor, fit)
+                self._polynomials[piece] = _Polynomial(degree, meet_matrix(interpolant, g), None, divisor, fit)
             else:
                 s, four = sigma[:, 0], products.grade(sigma, 4)
                 q = cga.metric_square(four, 4)
@@ -246,9 +310,9 @@ class SurfaceRoots:
                 four_part = cga.product(four, interpolant, (4,), (g,), (g,))
                 plus = (s + beta)[:, None] * interpolant - four_part
                 minus = (q / (s + beta))[:, None] * interpolant - four_part
-                self._polynomials[segment] = _Polynomial(degree, meet_matrix(plus, g), meet_matrix(minus, g), divisor,
-                                                         fit)
-        return self._polynomials[segment]
+                self._polynomials[piece] = _Polynomial(degree, meet_matrix(plus, g), meet_matrix(minus, g), divisor,
+                                                       fit)
+        return self._polynomials[piece]
 
     def samples_of(self, segment: int, count: int) -> _Samples:
         """The segment's count + 1 sampled objects (including both ends), as a matrix."""
@@ -260,7 +324,10 @@ class SurfaceRoots:
 
     def polynomial_degree(self, segment: int) -> int:
         """Degree of the intersection polynomial solved on a segment (after the known roots of W-
-        are divided out): 8 for linear circles, 4 for linear point pairs (see the module doc)."""
+        are divided out): 8 for linear circles, 4 for linear point pairs (see the module doc); a
+        motor surface's is its Chebyshev proxy's, MOTOR_PROXY_DEGREE."""
+        if self.motor:
+            return MOTOR_PROXY_DEGREE
         return self.polynomial(segment).degree
 
     def _proxy_roots(self, coefficients: np.ndarray, segment: int) -> tuple[np.ndarray, np.ndarray]:
@@ -307,7 +374,9 @@ class SurfaceRoots:
         if self.motor or self.surface.four_vector_free:
             return np.zeros(0)
         if segment not in self._known:
-            self._known[segment] = np.sort(segment + 0.5 * (self.structural_zeros(segment) + 1.0))
+            known = [a + 0.5 * (b - a) * (self.structural_zeros(segment, (a, b)) + 1.0)
+                     for a, b in self.pieces(segment)]
+            self._known[segment] = np.unique(np.concatenate(known))
         return self._known[segment]
 
     def objects(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
@@ -404,7 +473,14 @@ class SurfaceRoots:
                 found.append((start + which, t))
             which, t = (np.concatenate(parts) for parts in zip(*found))
             return rows[which], t, self.objects(t)[0]
-        poly = self.polynomial(segment)
+        found = [self._piece_roots(lines, coefficients, segment, piece, rtol) for piece in self.pieces(segment)]
+        return tuple(np.concatenate(parts) for parts in zip(*found))
+
+    def _piece_roots(self, lines: np.ndarray, coefficients: np.ndarray, segment: int, piece: tuple[float, float],
+                     rtol: float):
+        rows = np.arange(len(lines))
+        g = self.grade
+        poly = self.polynomial(segment, piece)
         plus = meet_values(coefficients, poly.map_plus, g)
         values = _square(plus) if g == 3 else plus[..., 0]
         if poly.map_minus is not None:
@@ -418,9 +494,9 @@ class SurfaceRoots:
         u = chebyshev.polish(series[which], u[which, column])
         # A true root next to a known root of W- sits in a cluster of roots of P, which the
         # eigenvalues resolve only roughly: the known roots are candidates too, to be refined.
-        known = self.known_roots(segment)
-        which = np.concatenate([which, np.repeat(np.arange(rows.size), known.size)])
-        t = np.concatenate([segment + 0.5 * (u + 1.0), np.tile(known, rows.size)])
+        a, b = piece
+        known = [t for t in self.known_roots(segment) if a <= t <= b]
+        which = np.concatenate([which, np.repeat(np.arange(rows.size), len(known))])
+        t = np.concatenate([a + 0.5 * (b - a) * (u + 1.0), np.tile(known, rows.size)])
         t, ok, objects = self.true_roots(lines[which], t, segment, rtol)
         return rows[which][ok], t[ok], objects[ok]
-

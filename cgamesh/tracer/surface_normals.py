@@ -83,13 +83,18 @@ def pair_normals(blades: np.ndarray, derivatives: np.ndarray, points: np.ndarray
     return _normal_from_lines(tangent_evolution, ruling)
 
 
-def numerical_normals(sample, grade: int, t: np.ndarray, points: np.ndarray, end: float) -> np.ndarray:
+def numerical_normals(sample, grade: int, t: np.ndarray, points: np.ndarray, end: float,
+                      side: float = 0.0) -> np.ndarray:
     """Normals (K, 3) at points (K, 3) of parameters t (K,) from the neighbouring objects.
 
     ``sample(t) -> Projection`` gives the objects (blades) at parameters t in [0, end]; all in
-    the same (local) frame as ``points``.
+    the same (local) frame as ``points``. ``side``: 0 for central differences, -1 or +1 for
+    one-sided ones from below or above t (at a segment joint where the surface stops, e.g. a
+    Kochanek-Bartels spline of tension 1, the two sheets meeting there may have different
+    normals, and a central difference would average them).
     """
-    low, high = np.maximum(t - NUMERICAL_STEP, 0.0), np.minimum(t + NUMERICAL_STEP, end)
+    low = t if side > 0.0 else np.maximum(t - NUMERICAL_STEP, 0.0)
+    high = t if side < 0.0 else np.minimum(t + NUMERICAL_STEP, end)
     here = sample(t).blades
     near = sample(np.concatenate([low, high])).blades
     count = len(t)
