@@ -21,6 +21,8 @@ added. Differences never straddle a joint: each segment is sampled and differenc
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 # The largest neighbouring third difference, times this, bounds |f'''| over a cell's neighbourhood.
@@ -38,11 +40,28 @@ def segment_samples(segment_count: int, cells: int) -> np.ndarray:
     return np.arange(segment_count, dtype=np.float64)[:, None] + fraction[None, :]
 
 
-def cell_bounds(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per cell upper bounds of |f|, |f'| and |f''| (Euclidean norms) over each cell.
+@dataclass(frozen=True)
+class CellDerivatives:
+    """Per cell (segments, S, d), component by component: |f| bounded by ``value``; f' within
+    ``first_radius`` of ``first``, f'' within ``second_radius`` of ``second``, everywhere in the cell."""
+
+    value: np.ndarray
+    first: np.ndarray
+    first_radius: np.ndarray
+    second: np.ndarray
+    second_radius: np.ndarray
+
+    def norms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Upper bounds (segments, S) of |f|, |f'| and |f''| (Euclidean norms) over each cell."""
+        norm = lambda parts: np.sqrt(np.sum(parts * parts, axis=-1))  # noqa: E731
+        return (norm(self.value), norm(np.abs(self.first) + self.first_radius),
+                norm(np.abs(self.second) + self.second_radius))
+
+
+def cell_derivatives(values: np.ndarray) -> CellDerivatives:
+    """Estimates with proven radii (given the Lipschitz margin) of f' and f'' over each cell.
 
     values (segments, S + 1, d): f sampled by ``segment_samples`` (parameter spacing 1 / S).
-    Returns three arrays (segments, S).
     """
     segments, samples, _ = values.shape
     cells = samples - 1
@@ -52,24 +71,27 @@ def cell_bounds(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     magnitude = np.max(np.abs(values), axis=1, keepdims=True)  # (segments, 1, d)
     rounding = READ_OUT_ROUNDING * np.maximum(magnitude, np.finfo(float).tiny)
 
-    d1 = np.abs(np.diff(values, axis=1)) / delta + 2.0 * rounding / delta  # (segments, S, d): cell i
-    d2 = np.abs(np.diff(values, n=2, axis=1)) / delta ** 2 + 4.0 * rounding / delta ** 2  # centred at 1..S-1
-    d3 = np.abs(np.diff(values, n=3, axis=1)) / delta ** 3 + 8.0 * rounding / delta ** 3  # at 1..S-2 (t_i-1..t_i+2)
+    d1 = np.diff(values, axis=1) / delta  # (segments, S, d): f' somewhere in cell i
+    d2 = np.diff(values, n=2, axis=1) / delta ** 2  # f'' at samples 1..S-1 (within a delta)
+    d3 = np.abs(np.diff(values, n=3, axis=1)) / delta ** 3 + 8.0 * rounding / delta ** 3
 
     # Third derivative over the neighbourhood [t_i-2, t_i+3] of cell i: the D3 taken there
     # (entry m of d3 spans samples m .. m+3; cell i wants m = i-2 .. i, clipped at the ends).
     cell = np.arange(cells)
     entries = np.clip(cell[:, None] + np.arange(-2, 1)[None, :], 0, d3.shape[1] - 1)  # (S, 3)
-    window = d3[:, entries]  # (segments, S, 3, d)
-    third = LIPSCHITZ_SAFETY * window.max(axis=2)
+    third = LIPSCHITZ_SAFETY * d3[:, entries].max(axis=2)
 
-    # Second derivative at a point of cell i: within 2 delta of where D2_i and D2_i+1 were taken
-    # (at the ends of a segment, the one inside: cell 0 uses D2_1, the last cell D2_S-1).
+    # f'' at a point of cell i is within 2 delta of where D2 at samples i and i+1 were taken
+    # (at the ends of a segment, the one inside: cell 0 uses D2 at sample 1, the last cell at S-1).
     second_at = np.concatenate([d2[:, :1], d2, d2[:, -1:]], axis=1)  # index j <-> D2 at sample j
-    near = np.maximum(second_at[:, :-1], second_at[:, 1:])  # cell i: D2 at samples i and i+1
-    second = near + 2.0 * delta * third
-    first = d1 + delta * second
-    value = np.max(np.abs(np.stack([values[:, :-1], values[:, 1:]])), axis=0) + 0.5 * delta * first
-    norm = lambda parts: np.sqrt(np.sum(parts * parts, axis=-1))  # noqa: E731
-    return norm(value), norm(first), norm(second)
+    left, right = second_at[:, :-1], second_at[:, 1:]
+    second = 0.5 * (left + right)
+    second_radius = 0.5 * np.abs(left - right) + 2.0 * delta * third + 4.0 * rounding / delta ** 2
+    first_radius = delta * (np.abs(second) + second_radius) + 2.0 * rounding / delta
+    value = np.maximum(np.abs(values[:, :-1]), np.abs(values[:, 1:])) + 0.5 * delta * (np.abs(d1) + first_radius)
+    return CellDerivatives(value, d1, first_radius, second, second_radius)
 
+
+def cell_bounds(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per cell upper bounds (segments, S) of |f|, |f'| and |f''| (Euclidean norms) over each cell."""
+    return cell_derivatives(values).norms()

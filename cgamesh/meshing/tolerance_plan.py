@@ -27,14 +27,15 @@ its intervals: at most the tolerance, by construction.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from cgamesh.errors import InvalidInputError
 from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
 from cgamesh.geometry.surface import EvolvedSurface
-from cgamesh.meshing.derivative_bounds import cell_bounds, segment_samples
+from cgamesh.meshing.circles import transported_frames
+from cgamesh.meshing.derivative_bounds import cell_bounds, cell_derivatives, segment_samples
 
 # Cells per segment of the derivative sampling: at least this many, and about this many per
 # ring of a first estimate (the Lipschitz margin shrinks with the cells; the cost grows).
@@ -46,8 +47,13 @@ SAMPLE_CHUNK = 512
 # Counts around / across tried when choosing the split of the tolerance.
 AROUND_CANDIDATES = 48
 MAX_ACROSS = 64
+# Angles at which the largest |d2x/dt2| around a circle is looked for (plus a margin between).
+ANGLES = 32
 # Rounds of raising the density where an interval's bound misses, before splitting it.
 DENSITY_ROUNDS = 4
+# A closed loop's holonomy rate is bounded again at most this often, with this margin.
+HOLONOMY_ROUNDS = 6
+HOLONOMY_MARGIN = 1.05
 # Refuse (InvalidInputError) rather than allocate beyond these; the budget's floor refuses earlier.
 MAX_AROUND = 1 << 16
 MAX_RINGS = 1 << 24
@@ -96,16 +102,42 @@ def _read(surface: EvolvedSurface, t: np.ndarray) -> np.ndarray:
 
 
 def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
+    """Per cell: A >= |d2x/dt2| and B >= |d2x/dt dtheta| for x = c + r (cos theta u + sin theta v)
+    in the sampled transported frame (u, v), their vectors combined (no triangle inequality
+    between the centre's, the radius' and the frame's parts), the largest radius, |n'| and |n''|."""
     t = segment_samples(surface.segment_count, cells)
     centre, normal, radius = circle_euclidean(_read(surface, t.ravel()))
+    u, v = transported_frames(normal, False, t.ravel())
     shape = t.shape
     scale = surface.frame.scale
-    _, _, c2 = cell_bounds(centre.reshape(shape + (3,)))
-    r0, r1, r2 = cell_bounds(radius.reshape(shape + (1,)))
-    _, n1, n2 = cell_bounds(normal.reshape(shape + (3,)))
-    terms = dict(C2=scale * c2, R1=scale * r1, R2=scale * r2, Rm=scale * r0, N1=n1, N2=n2)
-    # A closed loop's frames are turned by its holonomy (at most a half turn) spread evenly in t.
-    return _Cells(cells, terms, math.pi / surface.segment_count if closed else 0.0)
+    grid = lambda values: values.reshape(shape + values.shape[1:])  # noqa: E731
+    path = cell_derivatives(grid(centre))
+    cosine = cell_derivatives(grid(radius[:, None] * u))
+    sine = cell_derivatives(grid(radius[:, None] * v))
+    r0, _, _ = cell_bounds(grid(radius[:, None]))
+    _, n1, n2 = cell_bounds(grid(normal))
+    norm = lambda x: np.sqrt(np.sum(x * x, axis=-1))  # noqa: E731
+    # max over theta of |a + B cos theta + C sin theta|: on ANGLES angles, plus the most it can
+    # grow between two of them.
+    a, b, c = path.second, cosine.second, sine.second
+    angles = 2.0 * np.pi * np.arange(ANGLES) / ANGLES
+    on_circle = norm(a[..., None, :] + np.cos(angles)[:, None] * b[..., None, :] + np.sin(angles)[:, None] * c[..., None, :])
+    reach = np.sqrt(norm(b) ** 2 + norm(c) ** 2)
+    along = (on_circle.max(axis=-1) + reach * np.pi / ANGLES + norm(path.second_radius)
+             + np.hypot(norm(cosine.second_radius), norm(sine.second_radius)))
+    # max over theta of |-sin theta B1 + cos theta C1|: the larger singular value of [B1 C1].
+    b1, c1 = cosine.first, sine.first
+    bb, cc, bc = np.sum(b1 * b1, -1), np.sum(c1 * c1, -1), np.sum(b1 * c1, -1)
+    largest = np.sqrt(0.5 * (bb + cc) + np.sqrt(0.25 * (bb - cc) ** 2 + bc * bc))
+    twist = largest + np.hypot(norm(cosine.first_radius), norm(sine.first_radius))
+    terms = dict(A=scale * along, B=scale * twist, Rm=scale * r0, N1=n1, N2=n2)
+    return _Cells(cells, terms, _holonomy(normal, t.ravel()) / surface.segment_count if closed else 0.0)
+
+
+def _holonomy(normal: np.ndarray, t: np.ndarray) -> float:
+    """|angle| by which transport around a closed loop of these normals turns its frame."""
+    u, _ = transported_frames(normal, False, t)
+    return abs(float(np.arctan2(np.dot(np.cross(u[0], u[-1]), normal[0]), np.dot(u[0], u[-1]))))
 
 
 def _ribbon_cells(surface: EvolvedSurface, cells: int) -> _Cells:
@@ -120,18 +152,21 @@ def _ribbon_cells(surface: EvolvedSurface, cells: int) -> _Cells:
 
 
 def _circle_error(terms: dict, h, around, rate: float):
-    """E for intervals of length h with the given term maxima and M = around (broadcasting)."""
-    n1, n2 = terms["N1"], terms["N2"]
+    """E for intervals of length h with the given term maxima and M = around (broadcasting).
+
+    The mesh's frame on an interval is the smallest rotation from the first ring's plane,
+    which spins about n relative to the sampled transport by psi' (at most turned |n'| / q,
+    plus a closed loop's holonomy rate): x(t, theta) = x_G(t, theta + psi(t)) adds
+    2 B psi' + r (psi'^2 + |psi''|) to A and r psi' to B."""
+    n1, n2, rm = terms["N1"], terms["N2"], terms["Rm"]
     turned = h * n1  # bounds |n(t) - n(t_k)| over the interval
     q = 2.0 - 0.5 * turned * turned  # <= 1 + n(t_k) . n(t)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        twist = turned * n1 / q + rate  # the minimal-rotation frame's spin about n, plus a loop's
-        omega = np.sqrt(n1 * n1 + twist * twist)
-        spin = n2 + turned * n2 / q + (turned * n1 / q) ** 2
-        a = terms["C2"] + terms["R2"] + 2.0 * terms["R1"] * omega + terms["Rm"] * (spin + omega * omega)
-        b = np.sqrt(terms["R1"] ** 2 + (terms["Rm"] * omega) ** 2)
-        error = (terms["Rm"] * (1.0 - np.cos(np.pi / around)) + a * h * h / 8.0
-                 + b * h * np.sin(np.pi / around) / 2.0)
+        spin = turned * n1 / q + rate
+        spin_rate = turned * n2 / q + (turned * n1 / q) ** 2
+        a = terms["A"] + 2.0 * terms["B"] * spin + rm * (spin * spin + spin_rate)
+        b = terms["B"] + rm * spin
+        error = rm * (1.0 - np.cos(np.pi / around)) + a * h * h / 8.0 + b * h * np.sin(np.pi / around) / 2.0
     return np.where(turned < 1.0, error, np.inf)
 
 
@@ -141,10 +176,8 @@ def _ribbon_error(terms: dict, h, across, rate: float = 0.0):
 
 def _circle_spacing(terms: dict, around, tolerance: float, rate: float):
     """Per cell (and candidate M) the spacing h meeting the tolerance, leading terms only."""
-    n1 = terms["N1"]
-    omega = np.sqrt(n1 * n1 + rate * rate)
-    a = (terms["C2"] + terms["R2"] + 2.0 * terms["R1"] * omega + terms["Rm"] * (terms["N2"] + omega * omega)) / 8.0
-    b = np.sqrt(terms["R1"] ** 2 + (terms["Rm"] * omega) ** 2) * np.sin(np.pi / around) / 2.0
+    a = (terms["A"] + 2.0 * terms["B"] * rate + terms["Rm"] * rate * rate) / 8.0
+    b = (terms["B"] + terms["Rm"] * rate) * np.sin(np.pi / around) / 2.0
     c = tolerance - terms["Rm"] * (1.0 - np.cos(np.pi / around))
     return _root(a, b, c)
 
@@ -312,12 +345,13 @@ def plan_tolerance(surface: EvolvedSurface, tolerance: float, kind: str = "circl
     cells, around, density, counts = _plan(family, tolerance)
     names = sorted(cells.terms)
     table = _RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1))
+    t = None
     for _ in range(DENSITY_ROUNDS):
         t = _place(density, counts, cells.cells)
         error, first, last, _ = _interval_errors(family, cells, table, names, t, around)
         missed = error > tolerance
         if not np.any(missed):
-            return TolerancePlan(around, t, float(error.max()))
+            break
         # Raise the density over the cells of the intervals that miss, as the error would need.
         factor = np.ones(density.size)
         raise_by = np.sqrt(np.minimum(error[missed] / tolerance, 4.0)) * 1.02
@@ -328,7 +362,20 @@ def plan_tolerance(surface: EvolvedSurface, tolerance: float, kind: str = "circl
         counts = _ring_counts(density, cells.cells)
         if counts.sum() + 1 > MAX_RINGS:
             break
-    return TolerancePlan(around, *_split_missed(family, cells, table, names, t, around, tolerance))
+    t, bound = _split_missed(family, cells, table, names, t, around, tolerance)
+    if kind == "circles" and closed:
+        # The loop's frames are turned by the holonomy of these rings' transport, spread evenly:
+        # bound again with its rate until the rate assumed covers it.
+        for _ in range(HOLONOMY_ROUNDS):
+            _, normal, _ = circle_euclidean(_read(surface, t))
+            rate = _holonomy(normal, t) / surface.segment_count
+            if rate <= cells.closed_rate:
+                break
+            cells = replace(cells, closed_rate=rate * HOLONOMY_MARGIN)
+            t, bound = _split_missed(family, cells, table, names, t, around, tolerance)
+        else:
+            raise InvalidInputError(f"surface '{surface.name}': the closed loop's frame holonomy does not settle")
+    return TolerancePlan(around, t, bound)
 
 
 def _split_missed(family, cells, table, names, t, around, tolerance):
