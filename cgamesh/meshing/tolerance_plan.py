@@ -39,9 +39,9 @@ from cgamesh.meshing.derivative_bounds import cell_bounds, cell_derivatives, seg
 
 # Cells per segment of the derivative sampling: at least this many, and about this many per
 # ring of a first estimate (the Lipschitz margin shrinks with the cells; the cost grows).
-MIN_CELLS = 16
+MIN_CELLS = 32
 MAX_CELLS = 256
-CELLS_PER_RING = 2
+CELLS_PER_RING = 4
 # Samples read out per call (the projection's batched products slow down beyond).
 SAMPLE_CHUNK = 512
 # Counts around / across tried when choosing the split of the tolerance.
@@ -221,11 +221,14 @@ class _Surface:
         if self.kind != "circles":
             return np.arange(2, MAX_ACROSS + 1)
         largest = float(cells.terms["Rm"].max())
-        smallest = 3 if tolerance >= largest else max(3, math.ceil(math.pi / math.acos(1.0 - tolerance / largest)))
-        if smallest > MAX_AROUND:
+        # Fewest M whose sag r (1 - cos(pi / M)) is below the tolerance; acos(1 - x) written as
+        # 2 asin(sqrt(x / 2)), which stays accurate for tiny x.
+        half_angle = math.pi if tolerance >= largest else 2.0 * math.asin(math.sqrt(0.5 * tolerance / largest))
+        if half_angle <= math.pi / MAX_AROUND:
             raise InvalidInputError(
                 f"tolerance {tolerance:.3g} is too small for surface '{self.surface.name}': "
                 f"it needs more than {MAX_AROUND} vertices around")
+        smallest = max(3, math.ceil(math.pi / half_angle))
         # The sag takes part of the tolerance; the optimum lies where the rest is not too small.
         high = min(MAX_AROUND, 4 * smallest + 8)
         return np.unique(np.round(np.geomspace(smallest, high, AROUND_CANDIDATES)).astype(int))
