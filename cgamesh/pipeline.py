@@ -33,8 +33,8 @@ def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
     """The mesh of one surface, in the scene file's frame and units.
 
     A tolerance (from the command line, or the file's unless the command line gives a full
-    resolution) asks for the fewest vertices within that distance of the true surface; the
-    mesh's ``max_deviation`` then holds the measured distance. ``tangents``: the circle mesher's
+    resolution) asks for a mesh within that distance of the true surface, its counts from an
+    a priori bound; the mesh's ``max_deviation`` then holds that bound. ``tangents``: the circle mesher's
     analytic tangents are wanted (an output writes TANGENT).
     """
     tolerance = _tolerance(spec, resolution)
