@@ -131,8 +131,15 @@ def test_tolerance_is_met_on_the_exported_mesh(path, index, relative, tmp_path):
         assert grid_deviation(surface, t, grid, family).max <= mesh.max_deviation
 
 
+# A flat ribbon (fig. 12's linear chords): its end points' in-plane curvature leaves the mesh on
+# the surface, but the bound counts it in full (docs/tolerance.md, "Where the bound is not tight").
+FLAT_RIBBON = pytest.mark.xfail(strict=True, reason="flat ribbon: in-plane curvature counted in full")
+COMPARED = [pytest.param(path, index, marks=FLAT_RIBBON if (path.stem, index) == ("fig12_cocircular_chords", 0) else ())
+            for path, index in CASES]
+
+
 @pytest.mark.parametrize("relative", [1e-2, 1e-3])
-@pytest.mark.parametrize("path, index", CASES, ids=[f"{p.stem}[{i}]" for p, i in CASES])
+@pytest.mark.parametrize("path, index", COMPARED, ids=[f"{p.stem}[{i}]" for p, i in CASES])
 def test_vertices_against_the_smallest_uniform_grid(path, index, relative):
     """The smallest uniform grid with the same vertices around that reaches the tolerance, found
     by bisection on its ring count (measured by cgamesh.meshing.deviation): the tolerance mesh
