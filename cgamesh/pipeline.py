@@ -48,11 +48,11 @@ def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
     """The mesh of one surface, in the scene file's frame and units.
 
     A tolerance (from the command line, or the file's unless the command line gives a full
-    resolution) asks for the fewest vertices within that distance of the true surface; the
-    mesh's ``max_deviation`` then holds the measured distance. ``tangents``: the circle mesher's
-    analytic tangents are wanted (an output writes TANGENT). ``max_memory``: the budget (bytes,
-    a size such as "2G", a cgamesh.budget.Budget, or None for the default); a surface that
-    needs more is refused with ResourceLimitError before anything is allocated.
+    resolution) asks for a mesh within that distance of the true surface, its counts from an
+    a priori bound; the mesh's ``max_deviation`` then holds that bound. ``tangents``: the circle
+    mesher's analytic tangents are wanted (an output writes TANGENT). ``max_memory``: the budget
+    (bytes, a size such as "2G", a cgamesh.budget.Budget, or None for the default); a surface
+    that needs more is refused with ResourceLimitError before anything is allocated.
     """
     plan = plan_surface(spec, resolution, tangents)
     costs.Budget.of(max_memory).require(plan.peak, plan.where, plan.what)
