@@ -85,8 +85,11 @@ def plan_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
         around = resolution.around or spec.around
         along = resolution.along or spec.along
         if spec.type == "circles" and around < 3:
-            where = f"--around {around}" if resolution.around else f"{spec.location}.resolution.around"
-            raise InvalidInputError(f"{where}: a circle needs at least 3 vertices around, got {around}")
+            if resolution.around:  # the file's own resolution is checked on loading
+                raise InvalidInputError(f"--around must be at least 3 for the circles of surface {spec.name!r} "
+                                        f"({spec.location.file}:{spec.location.line}), got {around}")
+            raise InvalidInputError(f"{spec.location}.resolution.around: a circle needs at least 3 vertices "
+                                    f"around, got {around}")
         held, peak = costs.surface_bytes(spec.type, around, along, spec.caps, tangents)
         where = (f"{spec.location} with --around {around} --along {along}" if overridden
                  else f"{spec.location}.resolution")
