@@ -5,14 +5,17 @@
 1. For every surface of the examples (circles and point pairs) it meshes uniform grids of
    growing size and tolerance-driven meshes for tolerances from 1e-1 to 1e-4 of the surface's
    size, and measures each mesh's largest deviation from the true surface over triangle
-   interiors (cgamesh.meshing.deviation), its vertex count and the time it took.
+   interiors (cgamesh.meshing.deviation), its vertex count and the time it took; and, at 1e-2,
+   1e-3 and 1e-4, compares the tolerance mesh with the smallest uniform grid (same vertices
+   around, rings evenly in t) reaching the tolerance, found by search over uniform grids:
+   vertices and time as ratios to that grid's.
 2. On the fig. 17 scene it measures the tracer's sampled root finder against the number N of
    objects per segment (hit-distance and normal errors, time) against the polynomial finder
    (benchmarks/bench_tracer.py's analysis).
 
 It writes docs/accuracy.md (the tables), docs/figures/accuracy_<example>_<surface>.png
 (deviation and time against vertex count) and docs/figures/root_finders.png, and prints the
-tables. --small measures fewer sizes and one example, for CI.
+tables. --small measures fewer sizes and one example, for CI; --examples a,b only those.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from cgamesh.meshing.deviation import CIRCLES, SEGMENTS, grid_deviation
 from cgamesh.meshing.circles import mesh_circle_surface
 from cgamesh.pipeline import Resolution, build_surface, mesh_surface
 from cgamesh.meshing.ribbons import mesh_ribbon_surface
+from cgamesh.meshing.tolerance_plan import plan_tolerance
 from cgamesh.inputs.scene import load_scene
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -68,8 +72,110 @@ def measure_surface(name, spec, sizes, tolerances) -> list[Row]:
     for relative in tolerances:
         mesh, ms = timed(lambda: mesh_surface(spec, Resolution(tolerance=relative * size)))
         assert mesh.max_deviation <= relative * size, (name, relative, mesh.max_deviation / size)
-        rows.append(Row(name, "tolerance", f"{relative:g}", mesh.vertex_count, mesh.max_deviation / size, ms))
+        measured = tolerance_mesh_deviation(surface, spec, relative * size, mesh)
+        assert measured <= mesh.max_deviation, (name, relative, measured / size, mesh.max_deviation / size)
+        rows.append(Row(name, "tolerance", f"{relative:g}", mesh.vertex_count, measured / size, ms))
     return rows
+
+
+def tolerance_mesh_deviation(surface, spec, tolerance: float, mesh) -> float:
+    """cgamesh.meshing.deviation's measure of a tolerance mesh (on its plan's rings)."""
+    kind = "point_pairs" if spec.type == "point_pairs" else "circles"
+    plan = plan_tolerance(surface, tolerance, kind, spec.closed)
+    columns = plan.around if kind == "point_pairs" else plan.around + 1
+    grid = mesh.positions[: plan.rings * columns].reshape(plan.rings, columns, 3)
+    return grid_deviation(surface, plan.t, grid, SEGMENTS if kind == "point_pairs" else CIRCLES).max
+
+
+@dataclass(frozen=True)
+class Comparison:
+    example: str
+    relative: float
+    around: int
+    rings: int
+    vertices: int
+    milliseconds: float
+    bound: float  # relative to the surface's size
+    measured: float
+    uniform_rings: int
+    uniform_vertices: int
+    uniform_milliseconds: float
+    uniform_measured: float
+
+
+def best_time(work, repeats: int = 3):
+    """(result, least milliseconds of ``repeats`` runs)."""
+    best, result = float("inf"), None
+    for _ in range(repeats):
+        result, ms = timed(work)
+        best = min(best, ms)
+    return result, best
+
+
+def uniform_grid(surface, spec, around: int, rings: int):
+    """(mesh, grid, t) of the uniform grid: ``around`` vertices around (across), rings even in t."""
+    t = np.linspace(0.0, surface.segment_count, rings)
+    if spec.type == "point_pairs":
+        mesh = mesh_ribbon_surface(surface, around, t=t, closed=spec.closed)
+        return mesh, mesh.positions.reshape(rings, around, 3), t
+    mesh = mesh_circle_surface(surface, around, t=t, caps=spec.caps, closed=spec.closed)
+    return mesh, mesh.positions[: rings * (around + 1)].reshape(rings, around + 1, 3), t
+
+
+def smallest_uniform(surface, spec, around: int, tolerance: float, start: int) -> tuple[int, float]:
+    """The fewest rings (and the deviation) of a uniform grid with ``around`` that reaches the
+    tolerance, by doubling then bisection on its measured deviation (cgamesh.meshing.deviation)."""
+    family = SEGMENTS if spec.type == "point_pairs" else CIRCLES
+
+    def deviation(rings):
+        _, grid, t = uniform_grid(surface, spec, around, rings)
+        return grid_deviation(surface, t, grid, family).max
+
+    low, high = 1, max(2, start)
+    while (high_deviation := deviation(high)) > tolerance:
+        low, high = high, 2 * high
+    while high - low > 1:
+        middle = (low + high) // 2
+        middle_deviation = deviation(middle) if middle >= 2 else float("inf")
+        if middle_deviation <= tolerance:
+            high, high_deviation = middle, middle_deviation
+        else:
+            low = middle
+    return high, high_deviation
+
+
+def compare_with_uniform(name, spec, relatives) -> list[Comparison]:
+    """Per tolerance: the tolerance mesh against the smallest uniform grid reaching it."""
+    surface = build_surface(spec)
+    size = surface.frame.scale
+    kind = "point_pairs" if spec.type == "point_pairs" else "circles"
+    rows = []
+    for relative in relatives:
+        tolerance = relative * size
+        mesh, ms = best_time(lambda: mesh_surface(spec, Resolution(tolerance=tolerance)))
+        plan = plan_tolerance(surface, tolerance, kind, spec.closed)
+        measured = tolerance_mesh_deviation(surface, spec, tolerance, mesh)
+        rings, uniform_measured = smallest_uniform(surface, spec, plan.around, tolerance, plan.rings // 2)
+        uniform, uniform_ms = best_time(lambda: uniform_grid(surface, spec, plan.around, rings)[0])
+        rows.append(Comparison(name, relative, plan.around, plan.rings, mesh.vertex_count, ms, plan.bound / size,
+                               measured / size, rings, uniform.vertex_count, uniform_ms, uniform_measured / size))
+    return rows
+
+
+def comparison_table(rows: list[Comparison]) -> str:
+    lines = ["| surface | tolerance | around | rings | vertices | bound | measured | uniform rings "
+             "| uniform vertices | uniform measured | vertices ratio | time ratio |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        lines.append(f"| {r.example} | {r.relative:g} | {r.around} | {r.rings} | {r.vertices} | {r.bound:.2e} "
+                     f"| {r.measured:.2e} | {r.uniform_rings} | {r.uniform_vertices} | {r.uniform_measured:.2e} "
+                     f"| {r.vertices / r.uniform_vertices:.2f} | {r.milliseconds / r.uniform_milliseconds:.2f} |")
+    ratios = np.array([r.vertices / r.uniform_vertices for r in rows])
+    times = np.array([r.milliseconds / r.uniform_milliseconds for r in rows])
+    lines += ["", f"Vertices ratio: median {np.median(ratios):.2f}, range {ratios.min():.2f}-{ratios.max():.2f}; "
+              f"time ratio: median {np.median(times):.2f}, range {times.min():.2f}-{times.max():.2f} "
+              f"({len(rows)} cases)."]
+    return "\n".join(lines)
 
 
 def root_finders(small: bool) -> tuple[str, dict]:
@@ -156,19 +262,26 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("docs"))
     parser.add_argument("--small", action="store_true", help="fewer sizes (for CI)")
+    parser.add_argument("--examples", default="", help="comma-separated example stems (default: all)")
     args = parser.parse_args()
     sizes = (8, 16, 32) if args.small else (8, 16, 32, 64, 128, 256)
     tolerances = (1e-1, 1e-2) if args.small else (1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4)
+    compared = (1e-2,) if args.small else (1e-2, 1e-3, 1e-4)
+    chosen = set(filter(None, args.examples.split(",")))
     figures = args.out / "figures"
     figures.mkdir(parents=True, exist_ok=True)
 
-    all_rows = []
+    all_rows, comparisons = [], []
     for path in sorted(EXAMPLES.glob("*.yaml")):
+        if chosen and path.stem not in chosen:
+            continue
         for spec in load_scene(path).surfaces:
             name = f"{path.stem}/{spec.name}"
             rows = measure_surface(name, spec, sizes, tolerances)
             plot(rows, figures / f"accuracy_{path.stem}_{spec.name}.png")
             all_rows.extend(rows)
+            comparisons.extend(compare_with_uniform(name, spec, compared))
+            print(comparison_table(comparisons[-len(compared):]), flush=True)
             if args.small:
                 break
         if args.small and all_rows:
@@ -177,22 +290,33 @@ def main() -> None:
     plot_root_finders(finder_figures, figures / "root_finders.png")
 
     text = table(all_rows)
+    against = comparison_table(comparisons)
     (args.out / "accuracy.md").write_text(
         "# Speed against accuracy, measured\n\n"
         "Regenerate with `python benchmarks/report_accuracy.py --out docs`.\n\n"
-        "## Tessellation\n\n"
+        "## Tolerance against the smallest uniform grid\n\n"
+        "For each surface and tolerance (relative to the surface's size: the radius of the ball its\n"
+        "controls fill), the tolerance mesh (`--tolerance`: counts and rings from a priori bounds,\n"
+        "docs/tolerance.md) against the smallest uniform grid with the same vertices around (across)\n"
+        "and rings evenly spaced in the parameter whose deviation reaches the tolerance, found here by\n"
+        "doubling and bisection on its ring count. Bound: the tolerance mesh's a priori bound; measured:\n"
+        "cgamesh.meshing.deviation's figure (relative). Times are the best of 3 runs, the tolerance\n"
+        "mesh's including its planning; ratios are tolerance mesh / uniform grid.\n\n"
+        + against + "\n\n## Tessellation\n\n"
         "Deviation is the largest distance of the mesh from the true surface over triangle interiors\n"
-        "(cgamesh.meshing.deviation), relative to the surface's size (the radius of the ball its controls\n"
-        "fill). Uniform grids have n vertices around (n / 4 across a ribbon) and n rings per segment;\n"
-        "tolerance meshes are cgamesh's tolerance-driven tessellation, whose time includes measuring\n"
-        "the result. Plots: `figures/accuracy_<example>_<surface>.png`.\n\n"
+        "(cgamesh.meshing.deviation), relative to the surface's size. Uniform grids have n vertices\n"
+        "around (n / 4 across a ribbon) and n rings per segment; tolerance meshes are cgamesh's\n"
+        "tolerance-driven tessellation (their deviation is measured the same way, after the timing).\n"
+        "Plots: `figures/accuracy_<example>_<surface>.png`.\n\n"
         + text + "\n\n## The tracer's root finders\n\n"
         "The paper's sampled finder (N objects per segment, sign changes, local quadratic) against\n"
         "the closed-form polynomial finder, on the fig. 17 scene; errors relative to the surface's\n"
         "bounding radius. Plot: `figures/root_finders.png`.\n\n" + finders + "\n"
     )
     print(text)
+    print(against)
     print(finders)
+
 
 if __name__ == "__main__":
     main()

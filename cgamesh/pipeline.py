@@ -48,11 +48,11 @@ def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
     """The mesh of one surface, in the scene file's frame and units.
 
     A tolerance (from the command line, or the file's unless the command line gives a full
-    resolution) asks for the fewest vertices within that distance of the true surface; the
-    mesh's ``max_deviation`` then holds the measured distance. ``tangents``: the circle mesher's
-    analytic tangents are wanted (an output writes TANGENT). ``max_memory``: the budget (bytes,
-    a size such as "2G", a cgamesh.budget.Budget, or None for the default); a surface that
-    needs more is refused with ResourceLimitError before anything is allocated.
+    resolution) asks for a mesh within that distance of the true surface, its counts from an
+    a priori bound; the mesh's ``max_deviation`` then holds that bound. ``tangents``: the circle
+    mesher's analytic tangents are wanted (an output writes TANGENT). ``max_memory``: the budget
+    (bytes, a size such as "2G", a cgamesh.budget.Budget, or None for the default); a surface
+    that needs more is refused with ResourceLimitError before anything is allocated.
     """
     plan = plan_surface(spec, resolution, tangents)
     costs.Budget.of(max_memory).require(plan.peak, plan.where, plan.what)
@@ -85,8 +85,11 @@ def plan_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
         around = resolution.around or spec.around
         along = resolution.along or spec.along
         if spec.type == "circles" and around < 3:
-            where = f"--around {around}" if resolution.around else f"{spec.location}.resolution.around"
-            raise InvalidInputError(f"{where}: a circle needs at least 3 vertices around, got {around}")
+            if resolution.around:  # the file's own resolution is checked on loading
+                raise InvalidInputError(f"--around must be at least 3 for the circles of surface {spec.name!r} "
+                                        f"({spec.location.file}:{spec.location.line}), got {around}")
+            raise InvalidInputError(f"{spec.location}.resolution.around: a circle needs at least 3 vertices "
+                                    f"around, got {around}")
         held, peak = costs.surface_bytes(spec.type, around, along, spec.caps, tangents)
         where = (f"{spec.location} with --around {around} --along {along}" if overridden
                  else f"{spec.location}.resolution")

@@ -22,8 +22,9 @@ class SurfaceMesh:
     faces:     (F, 3) integer vertex indices (int32 from the meshers), counter-clockwise seen from the normals' side.
     name:      the surface's name from the scene file.
     double_sided: True for surfaces meant to be seen from both sides (ribbons).
-    max_deviation: the measured largest distance of the mesh from its true surface over
-               triangle interiors (file units), when it was measured (tolerance-driven meshes).
+    max_deviation: an upper bound of the largest distance of the mesh from its true surface
+               over triangle interiors (file units), for tolerance-driven meshes (the a priori
+               bound of cgamesh.meshing.tolerance_plan, docs/tolerance.md).
 
     Optional, filled by meshers that know them exactly (None: exporters derive what they need):
     tangents:   (V, 4) float64 unit tangents along +u, orthogonal to the normals, and w = +-1 with

@@ -1,0 +1,97 @@
+"""Bounds of a curve's first and second derivatives over each cell of a dense sampling.
+
+A surface's members (circle centre, radius and plane normal; a ruling's end points) are
+smooth within each segment of the curve (the projection of a polynomial or rational curve,
+paper section 6) but only continuous, or once differentiable, at the joints. Sampled at
+S + 1 evenly spaced parameters per segment (spacing delta), divided differences are exact
+values of derivatives at unknown points (the mean-value theorem for divided differences,
+component by component):
+
+    D1_i = (f_i+1 - f_i) / delta                          = f'(xi),   xi in [t_i, t_i+1]
+    D2_i = (f_i+1 - 2 f_i + f_i-1) / delta^2              = f''(xi),  xi in [t_i-1, t_i+1]
+    D3_i = (f_i+2 - 3 f_i+1 + 3 f_i - f_i-1) / delta^3    = f'''(xi), xi in [t_i-1, t_i+2]
+
+Every point of cell i is within 2 delta of the points where the neighbouring D2 were taken,
+so |f''| <= |D2| + 2 delta L3 there, where L3 bounds |f'''| over the neighbourhood; L3 is
+LIPSCHITZ_SAFETY times the largest neighbouring |D3| (f''' itself varies between the samples;
+the factor covers that variation, which is what the property tests check). Likewise
+|f'| <= |D1| + delta |f''|. A rounding allowance for the differences of float64 read-outs is
+added. Differences never straddle a joint: each segment is sampled and differenced on its own.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+# The largest neighbouring third difference, times this, bounds |f'''| over a cell's neighbourhood.
+LIPSCHITZ_SAFETY = 2.0
+# Relative rounding error of the sampled read-outs (projection, square roots): the divided
+# differences get an allowance of this times the values' magnitude over delta^k.
+READ_OUT_ROUNDING = 1e-12
+# At least this many cells per segment (third differences need four samples).
+MIN_CELLS = 4
+
+
+def segment_samples(segment_count: int, cells: int) -> np.ndarray:
+    """Parameters (segments, cells + 1): each segment [s, s + 1] split into ``cells`` cells."""
+    fraction = np.linspace(0.0, 1.0, cells + 1)
+    return np.arange(segment_count, dtype=np.float64)[:, None] + fraction[None, :]
+
+
+@dataclass(frozen=True)
+class CellDerivatives:
+    """Per cell (segments, S, d), component by component: |f| bounded by ``value``; f' within
+    ``first_radius`` of ``first``, f'' within ``second_radius`` of ``second``, everywhere in the cell."""
+
+    value: np.ndarray
+    first: np.ndarray
+    first_radius: np.ndarray
+    second: np.ndarray
+    second_radius: np.ndarray
+
+    def norms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Upper bounds (segments, S) of |f|, |f'| and |f''| (Euclidean norms) over each cell."""
+        norm = lambda parts: np.sqrt(np.sum(parts * parts, axis=-1))  # noqa: E731
+        return (norm(self.value), norm(np.abs(self.first) + self.first_radius),
+                norm(np.abs(self.second) + self.second_radius))
+
+
+def cell_derivatives(values: np.ndarray) -> CellDerivatives:
+    """Estimates with proven radii (given the Lipschitz margin) of f' and f'' over each cell.
+
+    values (segments, S + 1, d): f sampled by ``segment_samples`` (parameter spacing 1 / S).
+    """
+    segments, samples, _ = values.shape
+    cells = samples - 1
+    if cells < MIN_CELLS:
+        raise ValueError(f"need at least {MIN_CELLS} cells per segment, got {cells}")
+    delta = 1.0 / cells
+    magnitude = np.max(np.abs(values), axis=1, keepdims=True)  # (segments, 1, d)
+    rounding = READ_OUT_ROUNDING * np.maximum(magnitude, np.finfo(float).tiny)
+
+    d1 = np.diff(values, axis=1) / delta  # (segments, S, d): f' somewhere in cell i
+    d2 = np.diff(values, n=2, axis=1) / delta ** 2  # f'' at samples 1..S-1 (within a delta)
+    d3 = np.abs(np.diff(values, n=3, axis=1)) / delta ** 3 + 8.0 * rounding / delta ** 3
+
+    # Third derivative over the neighbourhood [t_i-2, t_i+3] of cell i: the D3 taken there
+    # (entry m of d3 spans samples m .. m+3; cell i wants m = i-2 .. i, clipped at the ends).
+    cell = np.arange(cells)
+    entries = np.clip(cell[:, None] + np.arange(-2, 1)[None, :], 0, d3.shape[1] - 1)  # (S, 3)
+    third = LIPSCHITZ_SAFETY * d3[:, entries].max(axis=2)
+
+    # f'' at a point of cell i is within 2 delta of where D2 at samples i and i+1 were taken
+    # (at the ends of a segment, the one inside: cell 0 uses D2 at sample 1, the last cell at S-1).
+    second_at = np.concatenate([d2[:, :1], d2, d2[:, -1:]], axis=1)  # index j <-> D2 at sample j
+    left, right = second_at[:, :-1], second_at[:, 1:]
+    second = 0.5 * (left + right)
+    second_radius = 0.5 * np.abs(left - right) + 2.0 * delta * third + 4.0 * rounding / delta ** 2
+    first_radius = delta * (np.abs(second) + second_radius) + 2.0 * rounding / delta
+    value = np.maximum(np.abs(values[:, :-1]), np.abs(values[:, 1:])) + 0.5 * delta * (np.abs(d1) + first_radius)
+    return CellDerivatives(value, d1, first_radius, second, second_radius)
+
+
+def cell_bounds(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per cell upper bounds (segments, S) of |f|, |f'| and |f''| (Euclidean norms) over each cell."""
+    return cell_derivatives(values).norms()

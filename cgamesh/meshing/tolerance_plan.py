@@ -1,0 +1,404 @@
+"""Counts and ring placement for a tolerance, from a priori bounds: no trial meshes, no search.
+
+The mesh of a surface family x(t, theta) (circles: x = c + r F(t) e(theta); ribbons:
+x = a + s (b - a)) is its (t, theta) grid split into triangles. docs/tolerance.md proves that
+over the quad between rings t_k and t_k+1 = t_k + h, columns theta_j and theta_j + k, every
+point of both triangles lies within
+
+    E = sag + A h^2 / 8 + B h k' / 4
+
+of the true surface, where sag is the chord sag around (r (1 - cos(pi / M)) for circles, 0 for
+straight rulings), A bounds |d^2 x / dt^2| and B |d^2 x / dt dtheta| over the quad (the twist
+term) and k' the chord's length per unit of r (2 sin(pi / M)) or the fraction across (1 / (N - 1)).
+A and B come from bounds of the members' derivatives per cell of a dense sampling
+(cgamesh.meshing.derivative_bounds): for circles |c''|, |r'|, |r''|, |n'|, |n''| and the
+frame's angular velocity; for ribbons |a''|, |b''| and |(b - a)'|.
+
+From these, per cell and for each candidate count around, the spacing h whose bound meets the
+tolerance gives a ring density 1 / h; its integral per segment is the ring count, so the count
+around (or across) minimising vertices is chosen without meshing anything (``plan_counts``,
+cheap: usable by a resource budget before any mesh-sized allocation). Rings are then placed
+equidistributing that density in one pass, segment joints always rings; intervals whose
+bound (maxima over every cell they touch) still exceeds the tolerance have their density raised
+and are placed again, and any left are split evenly. The plan's ``bound`` is the largest E over
+its intervals: at most the tolerance, by construction.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from cgamesh.errors import InvalidInputError
+from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
+from cgamesh.geometry.surface import EvolvedSurface
+from cgamesh.meshing.circles import transported_frames
+from cgamesh.meshing.derivative_bounds import cell_bounds, cell_derivatives, segment_samples
+
+# Cells per segment of the derivative sampling: at least this many, and about this many per
+# ring of a first estimate (the Lipschitz margin shrinks with the cells; the cost grows).
+MIN_CELLS = 32
+MAX_CELLS = 256
+CELLS_PER_RING = 4
+# Samples read out per call (the projection's batched products slow down beyond).
+SAMPLE_CHUNK = 512
+# Counts around / across tried when choosing the split of the tolerance.
+AROUND_CANDIDATES = 48
+MAX_ACROSS = 64
+# Angles at which the largest |d2x/dt2| around a circle is looked for (plus a margin between).
+ANGLES = 32
+# Rounds of raising the density where an interval's bound misses, before splitting it.
+DENSITY_ROUNDS = 4
+# A closed loop's holonomy rate is bounded again at most this often, with this margin.
+HOLONOMY_ROUNDS = 6
+HOLONOMY_MARGIN = 1.05
+# Refuse (InvalidInputError) rather than allocate beyond these; the budget's floor refuses earlier.
+MAX_AROUND = 1 << 16
+MAX_RINGS = 1 << 24
+
+
+@dataclass(frozen=True)
+class TolerancePlan:
+    """around: vertices around each circle (the mesh adds a seam column) or across a ribbon;
+    t: ring (ruling) parameters, increasing from 0 to the segment count; bound: the proven
+    upper bound of the mesh's deviation from the surface over triangle interiors (file units)."""
+
+    around: int
+    t: np.ndarray
+    bound: float
+
+    @property
+    def rings(self) -> int:
+        return len(self.t)
+
+
+@dataclass(frozen=True)
+class PlannedCounts:
+    """The counts a tolerance needs, known before placing rings: around (or across) and rings."""
+
+    around: int
+    rings: int
+
+
+@dataclass(frozen=True)
+class _Cells:
+    """Per-cell bound terms (segments, cells) of a surface's members, in world units."""
+
+    cells: int
+    terms: dict
+    closed_rate: float  # angular rate of a closed loop's holonomy correction, about n
+
+    @property
+    def segments(self) -> int:
+        return next(iter(self.terms.values())).shape[0]
+
+
+def _read(surface: EvolvedSurface, t: np.ndarray) -> np.ndarray:
+    """The projected blades at parameters t, read in chunks of SAMPLE_CHUNK."""
+    parts = np.array_split(t, max(1, math.ceil(len(t) / SAMPLE_CHUNK)))
+    return np.concatenate([surface.sample(part).blades for part in parts])
+
+
+def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
+    """Per cell: A >= |d2x/dt2| and B >= |d2x/dt dtheta| for x = c + r (cos theta u + sin theta v)
+    in the sampled transported frame (u, v), their vectors combined (no triangle inequality
+    between the centre's, the radius' and the frame's parts), the largest radius, |n'| and |n''|."""
+    t = segment_samples(surface.segment_count, cells)
+    centre, normal, radius = circle_euclidean(_read(surface, t.ravel()))
+    u, v = transported_frames(normal, False, t.ravel())
+    shape = t.shape
+    scale = surface.frame.scale
+    grid = lambda values: values.reshape(shape + values.shape[1:])  # noqa: E731
+    path = cell_derivatives(grid(centre))
+    cosine = cell_derivatives(grid(radius[:, None] * u))
+    sine = cell_derivatives(grid(radius[:, None] * v))
+    r0, _, _ = cell_bounds(grid(radius[:, None]))
+    _, n1, n2 = cell_bounds(grid(normal))
+    norm = lambda x: np.sqrt(np.sum(x * x, axis=-1))  # noqa: E731
+    # max over theta of |a + B cos theta + C sin theta|: on ANGLES angles, plus the most it can
+    # grow between two of them.
+    a, b, c = path.second, cosine.second, sine.second
+    angles = 2.0 * np.pi * np.arange(ANGLES) / ANGLES
+    on_circle = norm(a[..., None, :] + np.cos(angles)[:, None] * b[..., None, :] + np.sin(angles)[:, None] * c[..., None, :])
+    reach = np.sqrt(norm(b) ** 2 + norm(c) ** 2)
+    along = (on_circle.max(axis=-1) + reach * np.pi / ANGLES + norm(path.second_radius)
+             + np.hypot(norm(cosine.second_radius), norm(sine.second_radius)))
+    # max over theta of |-sin theta B1 + cos theta C1|: the larger singular value of [B1 C1].
+    b1, c1 = cosine.first, sine.first
+    bb, cc, bc = np.sum(b1 * b1, -1), np.sum(c1 * c1, -1), np.sum(b1 * c1, -1)
+    largest = np.sqrt(0.5 * (bb + cc) + np.sqrt(0.25 * (bb - cc) ** 2 + bc * bc))
+    twist = largest + np.hypot(norm(cosine.first_radius), norm(sine.first_radius))
+    terms = dict(A=scale * along, B=scale * twist, Rm=scale * r0, N1=n1, N2=n2)
+    return _Cells(cells, terms, _holonomy(normal, t.ravel()) / surface.segment_count if closed else 0.0)
+
+
+def _holonomy(normal: np.ndarray, t: np.ndarray) -> float:
+    """|angle| by which transport around a closed loop of these normals turns its frame."""
+    u, _ = transported_frames(normal, False, t)
+    return abs(float(np.arctan2(np.dot(np.cross(u[0], u[-1]), normal[0]), np.dot(u[0], u[-1]))))
+
+
+def _ribbon_cells(surface: EvolvedSurface, cells: int) -> _Cells:
+    t = segment_samples(surface.segment_count, cells)
+    a, b = point_pair_endpoints(_read(surface, t.ravel()))
+    shape = t.shape + (3,)
+    scale = surface.frame.scale
+    _, _, a2 = cell_bounds(a.reshape(shape))
+    _, _, b2 = cell_bounds(b.reshape(shape))
+    _, d1, _ = cell_bounds((b - a).reshape(shape))
+    return _Cells(cells, dict(A=scale * np.maximum(a2, b2), B=scale * d1), 0.0)
+
+
+def _circle_error(terms: dict, h, around, rate: float):
+    """E for intervals of length h with the given term maxima and M = around (broadcasting).
+
+    The mesh's frame on an interval is the smallest rotation from the first ring's plane,
+    which spins about n relative to the sampled transport by psi' (at most turned |n'| / q,
+    plus a closed loop's holonomy rate): x(t, theta) = x_G(t, theta + psi(t)) adds
+    2 B psi' + r (psi'^2 + |psi''|) to A and r psi' to B."""
+    n1, n2, rm = terms["N1"], terms["N2"], terms["Rm"]
+    turned = h * n1  # bounds |n(t) - n(t_k)| over the interval
+    q = 2.0 - 0.5 * turned * turned  # <= 1 + n(t_k) . n(t)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        spin = turned * n1 / q + rate
+        spin_rate = turned * n2 / q + (turned * n1 / q) ** 2
+        a = terms["A"] + 2.0 * terms["B"] * spin + rm * (spin * spin + spin_rate)
+        b = terms["B"] + rm * spin
+        error = rm * (1.0 - np.cos(np.pi / around)) + a * h * h / 8.0 + b * h * np.sin(np.pi / around) / 2.0
+    return np.where(turned < 1.0, error, np.inf)
+
+
+def _ribbon_error(terms: dict, h, across, rate: float = 0.0):
+    return terms["A"] * h * h / 8.0 + terms["B"] * h / (4.0 * (across - 1))
+
+
+def _circle_spacing(terms: dict, around, tolerance: float, rate: float):
+    """Per cell (and candidate M) the spacing h meeting the tolerance, leading terms only."""
+    a = (terms["A"] + 2.0 * terms["B"] * rate + terms["Rm"] * rate * rate) / 8.0
+    b = (terms["B"] + terms["Rm"] * rate) * np.sin(np.pi / around) / 2.0
+    c = tolerance - terms["Rm"] * (1.0 - np.cos(np.pi / around))
+    return _root(a, b, c)
+
+
+def _ribbon_spacing(terms: dict, across, tolerance: float, rate: float = 0.0):
+    return _root(terms["A"] / 8.0, terms["B"] / (4.0 * (across - 1)), np.full(np.shape(terms["A"]), tolerance))
+
+
+def _root(a, b, c):
+    """Positive root h of a h^2 + b h = c (0 where c <= 0, inf where a = b = 0)."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        h = 2.0 * c / (b + np.sqrt(b * b + 4.0 * a * np.maximum(c, 0.0)))
+    return np.where(c > 0.0, np.nan_to_num(h, nan=np.inf, posinf=np.inf), 0.0)
+
+
+def _ring_counts(density: np.ndarray, cells: int) -> np.ndarray:
+    """Intervals per segment (..., segments) for densities (..., segments, cells)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        integral = density.sum(axis=-1) / cells
+        return np.maximum(1.0, np.ceil(integral * (1.0 + 1e-12)))
+
+
+class _Surface:
+    """What planning needs of one family: its cells' terms, error and spacing formulas."""
+
+    def __init__(self, surface: EvolvedSurface, kind: str, closed: bool):
+        self.surface, self.kind, self.closed = surface, kind, closed
+
+    def cells(self, count: int) -> _Cells:
+        if self.kind == "circles":
+            return _circle_cells(self.surface, count, self.closed)
+        return _ribbon_cells(self.surface, count)
+
+    def error(self, terms, h, around, rate):
+        return (_circle_error if self.kind == "circles" else _ribbon_error)(terms, h, around, rate)
+
+    def spacing(self, terms, around, tolerance, rate):
+        return (_circle_spacing if self.kind == "circles" else _ribbon_spacing)(terms, around, tolerance, rate)
+
+    def candidates(self, cells: _Cells, tolerance: float) -> np.ndarray:
+        if self.kind != "circles":
+            return np.arange(2, MAX_ACROSS + 1)
+        largest = float(cells.terms["Rm"].max())
+        # Fewest M whose sag r (1 - cos(pi / M)) is below the tolerance; acos(1 - x) written as
+        # 2 asin(sqrt(x / 2)), which stays accurate for tiny x.
+        half_angle = math.pi if tolerance >= largest else 2.0 * math.asin(math.sqrt(0.5 * tolerance / largest))
+        if half_angle <= math.pi / MAX_AROUND:
+            raise InvalidInputError(
+                f"tolerance {tolerance:.3g} is too small for surface '{self.surface.name}': "
+                f"it needs more than {MAX_AROUND} vertices around")
+        smallest = max(3, math.ceil(math.pi / half_angle))
+        # The sag takes part of the tolerance; the optimum lies where the rest is not too small.
+        high = min(MAX_AROUND, 4 * smallest + 8)
+        return np.unique(np.round(np.geomspace(smallest, high, AROUND_CANDIDATES)).astype(int))
+
+    def columns(self, around: int) -> int:
+        return around + 1 if self.kind == "circles" else around
+
+
+def _choose_counts(family: _Surface, cells: _Cells, tolerance: float) -> tuple[int, np.ndarray, np.ndarray]:
+    """(around, density (segments, cells), intervals per segment) minimising planned vertices."""
+    options = family.candidates(cells, tolerance)
+    terms = {k: v[None] for k, v in cells.terms.items()}
+    with np.errstate(divide="ignore"):
+        density = 1.0 / family.spacing(terms, options[:, None, None], tolerance, cells.closed_rate)
+    density = _neighbourhood_max(density)
+    counts = _ring_counts(density, cells.cells)  # (options, segments)
+    rings = counts.sum(axis=1) + 1.0
+    vertices = rings * np.array([family.columns(int(m)) for m in options])
+    best = int(np.argmin(np.where(np.isfinite(vertices), vertices, np.inf)))
+    if not np.isfinite(vertices[best]) or rings[best] > MAX_RINGS:
+        raise InvalidInputError(
+            f"tolerance {tolerance:.3g} is too small for surface '{family.surface.name}': "
+            f"it needs more than {MAX_RINGS} rings")
+    return int(options[best]), density[best], counts[best]
+
+
+def _neighbourhood_max(density: np.ndarray) -> np.ndarray:
+    """Each cell's density raised to its neighbours' within the segment (an interval spanning
+    a cell boundary is bounded with both cells' maxima)."""
+    padded = np.concatenate([density[..., :1], density, density[..., -1:]], axis=-1)
+    return np.maximum(np.maximum(padded[..., :-2], padded[..., 1:-1]), padded[..., 2:])
+
+
+def _place(density: np.ndarray, counts: np.ndarray, cells: int) -> np.ndarray:
+    """Ring parameters equidistributing ``density`` (segments, cells): counts[s] intervals in
+    segment s, its ends always rings."""
+    segments = density.shape[0]
+    density = density + 1e-9  # strictly increasing integrals, also where a segment is straight
+    integral = np.concatenate([np.zeros((segments, 1)), np.cumsum(density, axis=1) / cells], axis=1)
+    total = integral[:, -1]
+    offset = np.concatenate([[0.0], np.cumsum(total)[:-1]])
+    counts = counts.astype(np.int64)
+    segment = np.repeat(np.arange(segments), counts)
+    step = np.arange(len(segment)) - np.repeat(np.cumsum(counts) - counts, counts)
+    level = offset[segment] + total[segment] * step / counts[segment]
+    knots = (integral + offset[:, None]).ravel()
+    t_knots = segment_samples(segments, cells).ravel()
+    t = np.interp(level, knots, t_knots)
+    t[step == 0] = segment[step == 0]  # joints exactly
+    return np.append(t, float(segments))
+
+
+class _RangeMax:
+    """Maxima of per-cell arrays over ranges of cells (a sparse table: O(n log n) to build)."""
+
+    def __init__(self, columns: np.ndarray):
+        self.levels = [columns]
+        width = 1
+        while 2 * width <= len(columns):
+            last = self.levels[-1]
+            self.levels.append(np.maximum(last[:-width], last[width:]))
+            width *= 2
+
+    def query(self, first: np.ndarray, last: np.ndarray) -> np.ndarray:
+        span = last - first + 1
+        level = np.floor(np.log2(span)).astype(int)
+        out = np.empty((len(first),) + self.levels[0].shape[1:])
+        for j in np.unique(level):
+            chosen = level == j
+            table = self.levels[j]
+            out[chosen] = np.maximum(table[first[chosen]], table[last[chosen] - (1 << j) + 1])
+        return out
+
+
+def _interval_errors(family: _Surface, cells: _Cells, table: _RangeMax, names, t: np.ndarray, around: int):
+    """The bound E of every interval [t_k, t_k+1] (K-1,), with the maxima over every cell it touches,
+    and the first and last cell indices."""
+    n = cells.segments * cells.cells
+    first = np.clip(np.floor(t[:-1] * cells.cells).astype(np.int64), 0, n - 1)
+    last = np.clip(np.ceil(t[1:] * cells.cells).astype(np.int64) - 1, first, n - 1)
+    maxima = table.query(first, last)
+    terms = {name: maxima[:, i] for i, name in enumerate(names)}
+    return family.error(terms, np.diff(t), around, cells.closed_rate), first, last, terms
+
+
+def _plan(family: _Surface, tolerance: float) -> tuple[_Cells, int, np.ndarray, np.ndarray]:
+    """The sampled cells, the count around and the per-cell density and counts for ``tolerance``."""
+    if not (math.isfinite(tolerance) and tolerance > 0.0):
+        raise InvalidInputError(f"tolerance must be a finite number > 0, got {tolerance!r}")
+    cells = family.cells(MIN_CELLS)
+    around, density, counts = _choose_counts(family, cells, tolerance)
+    wanted = int(min(MAX_CELLS, max(MIN_CELLS, CELLS_PER_RING * counts.max())))
+    wanted = 1 << max(0, (wanted - 1).bit_length())  # a power of two: few distinct samplings
+    if wanted > cells.cells:
+        cells = family.cells(min(MAX_CELLS, wanted))
+        around, density, counts = _choose_counts(family, cells, tolerance)
+    return cells, around, density, counts
+
+
+def plan_counts(surface: EvolvedSurface, tolerance: float, kind: str = "circles", closed: bool = False) -> PlannedCounts:
+    """The counts around (across) and along that ``plan_tolerance`` would choose, before placing
+    any ring: reads the surface at a few hundred parameters and allocates nothing mesh-sized.
+    (The final ring count can exceed this estimate by the few rings the placement adds where an
+    interval's bound misses.) Vertices scale about as 1 / tolerance."""
+    family = _Surface(surface, kind, closed)
+    _, around, _, counts = _plan(family, tolerance)
+    return PlannedCounts(around, int(counts.sum()) + 1)
+
+
+def plan_tolerance(surface: EvolvedSurface, tolerance: float, kind: str = "circles", closed: bool = False) -> TolerancePlan:
+    """Counts and ring parameters for a mesh within ``tolerance`` of the surface (file units).
+
+    kind: "circles" or "point_pairs". Raises InvalidInputError for a tolerance that is not a
+    positive finite number or would need more than MAX_AROUND around or MAX_RINGS rings.
+    """
+    family = _Surface(surface, kind, closed)
+    cells, around, density, counts = _plan(family, tolerance)
+    names = sorted(cells.terms)
+    table = _RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1))
+    t = None
+    for _ in range(DENSITY_ROUNDS):
+        t = _place(density, counts, cells.cells)
+        error, first, last, _ = _interval_errors(family, cells, table, names, t, around)
+        missed = error > tolerance
+        if not np.any(missed):
+            break
+        # Raise the density over the cells of the intervals that miss, as the error would need.
+        factor = np.ones(density.size)
+        raise_by = np.sqrt(np.minimum(error[missed] / tolerance, 4.0)) * 1.02
+        lengths = last[missed] - first[missed] + 1
+        touched = np.repeat(first[missed] - np.cumsum(lengths) + lengths, lengths) + np.arange(lengths.sum())
+        np.maximum.at(factor, touched, np.repeat(raise_by, lengths))
+        density = density * factor.reshape(density.shape)
+        counts = _ring_counts(density, cells.cells)
+        if counts.sum() + 1 > MAX_RINGS:
+            break
+    t, bound = _split_missed(family, cells, table, names, t, around, tolerance)
+    if kind == "circles" and closed:
+        # The loop's frames are turned by the holonomy of these rings' transport, spread evenly:
+        # bound again with its rate until the rate assumed covers it.
+        for _ in range(HOLONOMY_ROUNDS):
+            _, normal, _ = circle_euclidean(_read(surface, t))
+            rate = _holonomy(normal, t) / surface.segment_count
+            if rate <= cells.closed_rate:
+                break
+            cells = replace(cells, closed_rate=rate * HOLONOMY_MARGIN)
+            t, bound = _split_missed(family, cells, table, names, t, around, tolerance)
+        else:
+            raise InvalidInputError(f"surface '{surface.name}': the closed loop's frame holonomy does not settle")
+    return TolerancePlan(around, t, bound)
+
+
+def _split_missed(family, cells, table, names, t, around, tolerance):
+    """Split each interval whose bound misses into as many equal parts as its maxima need."""
+    for _ in range(64):
+        error, _, _, terms = _interval_errors(family, cells, table, names, t, around)
+        missed = np.flatnonzero(error > tolerance)
+        if missed.size == 0:
+            return t, float(error.max())
+        h = np.diff(t)[missed]
+        picked = {name: value[missed] for name, value in terms.items()}
+        spacing = family.spacing(picked, around, tolerance, cells.closed_rate)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            parts = np.where(spacing > 0.0, np.ceil(h / spacing), np.inf)
+        parts = np.maximum(parts, 2.0)
+        if not np.all(np.isfinite(parts)) or len(t) + parts.sum() > MAX_RINGS:
+            raise InvalidInputError(
+                f"tolerance {tolerance:.3g} is too small for surface '{family.surface.name}': "
+                f"it needs more than {MAX_RINGS} rings")
+        inserted = [t[k] + h[i] * np.arange(1, int(parts[i])) / parts[i] for i, k in enumerate(missed)]
+        t = np.sort(np.concatenate([t] + inserted))
+    raise InvalidInputError(f"tolerance {tolerance:.3g}: no ring placement meets it for surface "
+                            f"'{family.surface.name}'")

@@ -1,0 +1,165 @@
+"""The a priori tolerance bound (cgamesh.meshing.tolerance_plan) is never exceeded.
+
+Property tests over random tubes and ribbons (every curve kind, sizes and positions at the
+extremes' ranges of tests/test_extremes.py): the plan's bound is at most the tolerance, and the
+deviation measured by cgamesh.meshing.deviation on the mesh made on the plan's rings is at most
+the bound. Also: the derivative bounds cover analytic derivatives; impossible tolerances are
+refused with an InvalidInputError, quickly; the planned counts are those the plan uses.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from cgamesh.errors import InvalidInputError
+from cgamesh.inputs.scene import Location, PointPairControl, SurfaceSpec
+from cgamesh.material import Material
+from cgamesh.meshing.circles import mesh_circle_surface
+from cgamesh.meshing.derivative_bounds import cell_bounds, segment_samples
+from cgamesh.meshing.deviation import CIRCLES, SEGMENTS, grid_deviation
+from cgamesh.meshing.ribbons import mesh_ribbon_surface
+from cgamesh.meshing.tolerance_plan import plan_counts, plan_tolerance
+from cgamesh.pipeline import build_surface
+from test_extremes import spec_of, tube
+
+HERE = Location("bound.yaml", 1, "surfaces[0]")
+PROPERTIES = settings(max_examples=12, suppress_health_check=[HealthCheck.too_slow], deadline=None)
+CURVES = ["linear", "bezier", "kb", "catmull_rom", "rational_bezier"]
+
+
+def measured(surface, plan, kind: str) -> float:
+    """cgamesh.meshing.deviation's figure for the mesh on the plan's rings."""
+    if kind == "point_pairs":
+        mesh = mesh_ribbon_surface(surface, plan.around, t=plan.t)
+        return grid_deviation(surface, plan.t, mesh.positions.reshape(plan.rings, plan.around, 3), SEGMENTS).max
+    mesh = mesh_circle_surface(surface, plan.around, t=plan.t)
+    grid = mesh.positions.reshape(plan.rings, plan.around + 1, 3)
+    return grid_deviation(surface, plan.t, grid, CIRCLES).max
+
+
+def ribbon_spec(a, b, curve: str, weights=None) -> SurfaceSpec:
+    weights = [1.0] * len(a) if weights is None else weights
+    controls = tuple(PointPairControl(tuple(map(float, p)), tuple(map(float, q)), float(w), HERE)
+                     for p, q, w in zip(a, b, weights))
+    return SurfaceSpec("ribbon", "point_pairs", curve, 0.0, 0.0, 0.0, False, True, controls, 2, 16, None,
+                       False, Material(), HERE)
+
+
+@PROPERTIES
+@given(log_scale=st.floats(-4.0, 4.0), distance=st.floats(0.0, 1e5), curve=st.sampled_from(CURVES),
+       count=st.integers(2, 5), log_relative=st.floats(-3.0, -1.0), seed=st.integers(0, 2**32 - 1))
+def test_tube_bound_is_never_exceeded(log_scale, distance, curve, count, log_relative, seed):
+    rng = np.random.default_rng(seed)
+    offset = distance * rng.normal(size=3) / np.sqrt(3.0)
+    centres, normals, radii = tube(10.0**log_scale, offset, count if curve != "catmull_rom" else max(count, 3), rng)
+    weights = list(10.0 ** rng.uniform(-1.0, 1.0, size=len(radii))) if curve == "rational_bezier" else None
+    surface = build_surface(spec_of(centres, normals, radii, curve=curve, weights=weights))
+    tolerance = 10.0**log_relative * surface.frame.scale
+    plan = plan_tolerance(surface, tolerance, "circles")
+    assert plan.bound <= tolerance
+    assert measured(surface, plan, "circles") <= plan.bound
+
+
+@PROPERTIES
+@given(log_scale=st.floats(-4.0, 4.0), distance=st.floats(0.0, 1e5), curve=st.sampled_from(CURVES),
+       count=st.integers(2, 5), twist=st.floats(0.0, 2.5), log_relative=st.floats(-3.0, -1.0),
+       seed=st.integers(0, 2**32 - 1))
+def test_ribbon_bound_is_never_exceeded(log_scale, distance, curve, count, twist, log_relative, seed):
+    rng = np.random.default_rng(seed)
+    count = max(count, 3) if curve == "catmull_rom" else count
+    scale = 10.0**log_scale
+    offset = distance * rng.normal(size=3) / np.sqrt(3.0)
+    angle = twist * np.arange(count) / max(count - 1, 1) + 0.2 * rng.normal(size=count)
+    height = np.cumsum(rng.uniform(0.5, 1.5, size=count)) * scale
+    half = scale * rng.uniform(0.5, 1.5, size=count)
+    middle = offset + np.stack([0.2 * scale * rng.normal(size=count), 0.2 * scale * rng.normal(size=count), height], 1)
+    across = np.stack([np.cos(angle), np.sin(angle), np.zeros(count)], axis=1) * half[:, None]
+    weights = list(10.0 ** rng.uniform(-1.0, 1.0, size=count)) if curve == "rational_bezier" else None
+    surface = build_surface(ribbon_spec(middle - across, middle + across, curve, weights))
+    tolerance = 10.0**log_relative * surface.frame.scale
+    plan = plan_tolerance(surface, tolerance, "point_pairs")
+    assert plan.bound <= tolerance
+    assert measured(surface, plan, "point_pairs") <= plan.bound
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1), log_relative=st.floats(-3.0, -1.5))
+def test_closed_loop_bound_is_never_exceeded(seed, log_relative):
+    """A closed loop's frames carry its holonomy, spread along it: the bound covers that spin."""
+    rng = np.random.default_rng(seed)
+    angle = np.linspace(0.0, 2.0 * np.pi, 6, endpoint=False)
+    centres = np.stack([2.0 * np.cos(angle), 2.0 * np.sin(angle), rng.uniform(-0.8, 0.8, size=6)], axis=1)
+    normals = np.stack([-np.sin(angle), np.cos(angle), 0.3 * rng.normal(size=6)], axis=1)
+    spec = spec_of(centres, normals, rng.uniform(0.3, 0.6, size=6), curve="catmull_rom", closed=True)
+    surface = build_surface(spec)
+    tolerance = 10.0**log_relative * surface.frame.scale
+    plan = plan_tolerance(surface, tolerance, "circles", closed=True)
+    mesh = mesh_circle_surface(surface, plan.around, t=plan.t, closed=True)
+    grid = mesh.positions.reshape(plan.rings, plan.around + 1, 3)
+    assert plan.bound <= tolerance
+    assert grid_deviation(surface, plan.t, grid, CIRCLES).max <= plan.bound
+
+
+def test_derivative_bounds_cover_the_analytic_derivatives():
+    """On f(t) = (sin 3t, t^3, exp(t) cos 5t) per segment, the per-cell bounds of |f|, |f'| and
+    |f''| are at least their largest values over each cell (checked at 64 points per cell), and
+    their excess shrinks as the cells get finer."""
+    def f(t):
+        return np.stack([np.sin(3.0 * t), t**3, np.exp(t) * np.cos(5.0 * t)], axis=-1)
+
+    def f1(t):
+        return np.stack([3.0 * np.cos(3.0 * t), 3.0 * t**2,
+                         np.exp(t) * (np.cos(5.0 * t) - 5.0 * np.sin(5.0 * t))], axis=-1)
+
+    def f2(t):
+        return np.stack([-9.0 * np.sin(3.0 * t), 6.0 * t,
+                         np.exp(t) * (-24.0 * np.cos(5.0 * t) - 10.0 * np.sin(5.0 * t))], axis=-1)
+
+    excess = {}
+    for cells in (16, 64):
+        t = segment_samples(3, cells)
+        value, first, second = cell_bounds(f(t))
+        inside = t[:, :-1, None] + np.linspace(0.0, 1.0, 64)[None, None, :] / cells  # (3, S, 64)
+        for order, (bound, derivative) in enumerate(((value, f), (first, f1), (second, f2))):
+            true = np.linalg.norm(derivative(inside), axis=-1).max(axis=-1)
+            assert np.all(bound >= true)
+            excess[cells, order] = float(((bound - true) / true.max()).max())
+    for order in range(3):  # the margins shrink with the cells (they are O(delta))
+        assert excess[64, order] <= excess[16, order] / 3.0
+
+
+@pytest.mark.parametrize("kind, path", [("circles", "examples/kb_tube.yaml"),
+                                        ("point_pairs", "examples/ribbon_loop.yaml")])
+@pytest.mark.parametrize("tolerance", [0.0, -1.0, float("nan"), float("inf"), 1e-30, 1e-15])
+def test_impossible_tolerances_are_refused_quickly(kind, path, tolerance):
+    from cgamesh.inputs.scene import load_scene
+
+    spec = load_scene(path).surfaces[0]
+    surface = build_surface(spec)
+    start = time.perf_counter()
+    with pytest.raises(InvalidInputError) as raised:
+        plan_tolerance(surface, tolerance * surface.frame.scale, kind, spec.closed)
+    assert "tolerance" in str(raised.value) and "\n" not in str(raised.value)
+    assert time.perf_counter() - start < 30.0  # refused, not ground through
+
+
+@pytest.mark.parametrize("kind, path", [("circles", "examples/kb_tube.yaml"),
+                                        ("circles", "examples/closed_loop.yaml"),
+                                        ("point_pairs", "examples/ribbon_loop.yaml")])
+def test_planned_counts_are_those_the_plan_uses(kind, path):
+    """plan_counts, for a resource budget, gives the count around and about the rings."""
+    from cgamesh.inputs.scene import load_scene
+
+    spec = load_scene(path).surfaces[0]
+    surface = build_surface(spec)
+    for relative in (1e-2, 1e-3):
+        tolerance = relative * surface.frame.scale
+        counts = plan_counts(surface, tolerance, kind, spec.closed)
+        plan = plan_tolerance(surface, tolerance, kind, spec.closed)
+        assert counts.around == plan.around
+        assert counts.rings <= plan.rings <= 1.5 * counts.rings + 8
