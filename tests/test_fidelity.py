@@ -118,7 +118,7 @@ def node_circle_bulge(chain: fidelity.Chain, line: fidelity.Centreline, samples:
 
 @pytest.mark.slow
 def test_motor_tubes_of_the_benchmark_neuron_stay_inside_the_envelope():
-    """benchmarks/bench_fidelity.py's neuron (1,289 chains, 575,000 vertices; ~20 s): at most 0.1%
+    """benchmarks/bench_fidelity.py's neuron (1,289 chains, 575,000 vertices; 4-20 s on a shared 2-core machine): at most 0.1%
     of the vertices beyond 1.25 radii, no fold, and no vertex beyond 1.6 radii where the node
     circles do not already reach there. The node circles are the input (centre, radius, the
     turn's bisector as normal) and pass through the tube exactly; one of them, radius 68 at a
