@@ -292,16 +292,21 @@ def closed_and_oriented(mesh: SurfaceMesh) -> bool:
 
 
 def node_tangents(p: np.ndarray) -> np.ndarray:
-    """Unit tangents (n, 3) of a polyline of distinct consecutive points: central differences,
-    one-sided at the ends, and one-sided where the central one vanishes (a turn back)."""
+    """Unit tangents (n, 3) of a polyline of distinct consecutive points: the bisector of the
+    unit chords on either side (one-sided at the ends; the incoming chord where the bisector
+    vanishes, a turn back). This is the direction of the motor tube's centre curve at the node
+    (a chord-length Catmull-Rom spline, docs/interpolation.md section 2), so the node rings stand
+    perpendicular to the path also where consecutive steps differ in length (the central
+    difference p[i+1] - p[i-1] leans towards the longer step)."""
     forward = np.diff(p, axis=0)
+    unit = forward / np.linalg.norm(forward, axis=1, keepdims=True)
     t = np.empty_like(p)
-    t[0], t[-1] = forward[0], forward[-1]
-    t[1:-1] = p[2:] - p[:-2]
+    t[0], t[-1] = unit[0], unit[-1]
+    t[1:-1] = unit[:-1] + unit[1:]
     length = np.linalg.norm(t, axis=1)
-    back = length <= 1e-12 * (1.0 + np.abs(p).max(axis=1))
+    back = length <= 1e-12
     back[[0, -1]] = False
-    t[1:-1][back[1:-1]] = forward[:-1][back[1:-1]]
+    t[1:-1][back[1:-1]] = unit[:-1][back[1:-1]]
     return t / np.linalg.norm(t, axis=1, keepdims=True)
 
 

@@ -19,8 +19,9 @@ same parameter (docs/interpolation.md):
 
 Splines with knots (linear, kb, catmull_rom) place node i at t = i but take their tangents
 per unit of "circle distance" (chord-length parametrisation): the span from circle i to
-i + 1 has length Delta_i = |c_{i+1} - c_i| + |r_{i+1} - r_i| + (r_i + r_{i+1}) / 2 * angle(n_i, n_{i+1}),
-the furthest a point of the circle moves, at most. Every component uses the same knots and
+i + 1 has length Delta_i = max(|c_{i+1} - c_i|, |r_{i+1} - r_i|, (r_i + r_{i+1}) / 2 * angle(n_i, n_{i+1})),
+the chord length of the centres wherever they move furthest (every tube along a path), so the
+centre curve is the chord-length spline of the centres. Every component uses the same knots and
 the same basis, so on both sides of a node the derivatives of (c, n, r) are one vector
 scaled by Delta_{i-1} or Delta_i: the point velocity fields are parallel there and the
 surface is tangent-continuous (C1 of its tangent planes) wherever the curve kind is C1.
@@ -117,8 +118,13 @@ def span_lengths(centre: np.ndarray, normal: np.ndarray, radius: np.ndarray, clo
     # angle from the cross product's length near 0 and pi (arccos loses half the digits there)
     sine = np.linalg.norm(np.cross(here(normal), nxt(normal)), axis=1)
     angle = np.arctan2(sine, cosine)
-    length = (np.linalg.norm(nxt(centre) - here(centre), axis=1) + np.abs(nxt(radius) - here(radius))
-              + 0.5 * (here(radius) + nxt(radius)) * angle)
+    # the largest of the three distances, not their sum: a tube whose centres move further than
+    # its radii change and its rings turn (every tube along a path) is then parametrised by the
+    # chord length of its centres alone, so its centre spline is the chord-length spline of the
+    # centres and its tangent at a node is the bisector of the unit chords
+    length = np.maximum(np.maximum(np.linalg.norm(nxt(centre) - here(centre), axis=1),
+                                   np.abs(nxt(radius) - here(radius))),
+                        0.5 * (here(radius) + nxt(radius)) * angle)
     return np.maximum(length, MIN_SPAN)
 
 

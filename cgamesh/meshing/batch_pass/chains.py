@@ -35,15 +35,17 @@ def _segment_tangents(p: np.ndarray, first: np.ndarray, count: np.ndarray) -> np
     chain_first = np.repeat(first, count)
     chain_last = chain_first + np.repeat(count, count) - 1
     is_first, is_last = index == chain_first, index == chain_last
-    t = np.empty_like(p)
     nxt, prev = np.minimum(index + 1, n - 1), np.maximum(index - 1, 0)
-    t[is_first] = p[nxt[is_first]] - p[is_first]
-    t[is_last] = p[is_last] - p[prev[is_last]]
+    forward = p[nxt] - p  # node i's outgoing chord (meaningless at a chain's last node)
+    unit = forward / np.where(is_last, 1.0, np.linalg.norm(forward, axis=1))[:, None]
+    t = np.empty_like(p)
+    t[is_first] = unit[is_first]
+    t[is_last] = unit[prev[is_last]]
     middle = ~is_first & ~is_last
-    t[middle] = p[nxt[middle]] - p[prev[middle]]
+    t[middle] = unit[prev[middle]] + unit[middle]
     length = np.linalg.norm(t, axis=1)
-    back = middle & (length <= 1e-12 * (1.0 + np.abs(p).max(axis=1)))
-    t[back] = p[back] - p[prev[back]]
+    back = middle & (length <= 1e-12)
+    t[back] = unit[prev[back]]
     return t / np.linalg.norm(t, axis=1, keepdims=True)
 
 

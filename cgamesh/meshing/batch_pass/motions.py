@@ -118,8 +118,9 @@ class ChainMotions:
         cosine = np.clip(np.einsum("ni,ni->n", normal[i], normal[j]), -1.0, 1.0)
         sine = np.linalg.norm(np.cross(normal[i], normal[j]), axis=1)
         angle = np.arctan2(sine, cosine)
-        spans = np.maximum(np.linalg.norm(centre[j] - centre[i], axis=1) + np.abs(radius[j] - radius[i])
-                           + 0.5 * (radius[i] + radius[j]) * angle, MIN_SPAN)
+        spans = np.maximum(np.maximum(np.maximum(np.linalg.norm(centre[j] - centre[i], axis=1),
+                                                 np.abs(radius[j] - radius[i])),
+                                      0.5 * (radius[i] + radius[j]) * angle), MIN_SPAN)
         secant = (values[j] - values[i]) / spans[:, None]  # (S, 7)
         # node n's spans: the one before (span n - 1 - chain) and after (span n - chain)
         chain = nodes.chain
