@@ -263,7 +263,7 @@ def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segm
     mesh = mesh_surface(spec, Resolution())
     if not (np.isfinite(mesh.positions).all() and np.isfinite(mesh.normals).all()):
         raise DegenerateGeometryError(f"{where}: expected a finite mesh, got non-finite vertices or normals")
-    if options.watertight and not closed_and_oriented(mesh):
+    if options.watertight and not (closed_and_oriented(mesh) and rings_in_order(mesh)):
         # The tube folds over itself (a radius large against its bend): frusta between the nodes
         # and spheres at the inner nodes stand for it, closed whatever the bend.
         return _frusta_chain(p, tube_radii, nodes, index, scalar, t, options, f"{stem}_{_label_name(chain.label)}")
@@ -337,6 +337,26 @@ def closed_and_oriented(mesh: SurfaceMesh) -> bool:
     backward = edges[:, 1] * mesh.vertex_count + edges[:, 0]
     unique, counts = np.unique(forward, return_counts=True)
     return bool(np.all(counts == 1) and np.isin(backward, unique).all())
+
+
+def rings_in_order(mesh: SurfaceMesh) -> bool:
+    """Whether each ring of a capped tube's grid (rings of equal size with a repeated seam
+    vertex, then two caps of one ring size each: ``circles._add_cap``) lies wholly ahead of the plane of the ring before it and the
+    one before wholly behind its plane. Where the centreline bends tighter than the radius the
+    inner wall of consecutive rings crosses: the tube is closed and consistently wound, yet
+    its surface passes through itself, and a union of it keeps that self-intersection."""
+    v = mesh.uvs[:, 1]
+    columns = int(np.argmax(v != v[0])) if (v != v[0]).any() else 0
+    grid = mesh.vertex_count - 2 * columns
+    if columns < 4 or grid <= 0 or grid % columns:
+        return False
+    rings = mesh.positions[:grid].reshape(-1, columns, 3)[:, :-1]
+    centre = rings.mean(axis=1)
+    normal = np.cross(rings - centre[:, None], np.roll(rings, -1, axis=1) - centre[:, None]).sum(axis=1)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    ahead = np.einsum("kij,kj->ki", rings[1:] - centre[:-1, None], normal[:-1]).min(axis=1)
+    behind = np.einsum("kij,kj->ki", rings[:-1] - centre[1:, None], normal[1:]).max(axis=1)
+    return bool((ahead > 0.0).all() and (behind < 0.0).all())
 
 
 def node_tangents(p: np.ndarray) -> np.ndarray:
