@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cgamesh.meshing.junctions import sphere_bands, uv_spheres
+from cgamesh.meshing.junctions import uv_spheres
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.weld import weld_by_position
 
@@ -82,4 +82,4 @@ def node_spheres(points: np.ndarray, radii: np.ndarray, around: int, name: str) 
     return uv_spheres(points, radii * enclosing_sphere_scale(around), around, name=name)
 
 
-__all__ = ["enclosing_sphere_scale", "frusta", "node_spheres", "sphere_bands"]
+__all__ = ["enclosing_sphere_scale", "frusta", "node_spheres"]
