@@ -135,7 +135,9 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
                 raise
             skipped.append(str(error))
             piece = None
-        if piece is not None:
+        if isinstance(piece, list):
+            pieces.extend(piece)
+        elif piece is not None:
             pieces.append(piece)
         progress(chain.label)
     spheres = _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem)
@@ -261,9 +263,10 @@ def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segm
     mesh = mesh_surface(spec, Resolution())
     if not (np.isfinite(mesh.positions).all() and np.isfinite(mesh.normals).all()):
         raise DegenerateGeometryError(f"{where}: expected a finite mesh, got non-finite vertices or normals")
-    if options.watertight and not closed_and_oriented(mesh):
-        raise DegenerateGeometryError(f"{where}: expected a closed, consistently wound tube for the union, got one "
-                                      "that folds over itself")
+    if options.watertight and not (closed_and_oriented(mesh) and rings_in_order(mesh)):
+        # The tube folds over itself (a radius large against its bend): frusta between the nodes
+        # and spheres at the inner nodes stand for it, closed whatever the bend.
+        return _frusta_chain(p, tube_radii, nodes, index, scalar, t, options, f"{stem}_{_label_name(chain.label)}")
     s = _node_parameter(mesh, len(nodes), options, p)
     grid = np.arange(len(nodes))
     attributes = {"radius": np.interp(s, grid, tube_radii), "segment": np.full(mesh.vertex_count, float(index))}
@@ -278,6 +281,51 @@ def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segm
     return _with(mesh, name=f"{stem}_{_label_name(chain.label)}", attributes=attributes, colors=colors)
 
 
+def _frusta_chain(p, tube_radii, nodes, index, scalar, t, options: TubeOptions, name: str) -> list[SurfaceMesh]:
+    """A folding chain as closed pieces: a capped frustum per consecutive node pair and an
+    enclosing sphere at each inner node, with the tube's attributes and colours."""
+    from cgamesh.meshing.frusta import frusta, node_spheres
+
+    pieces = []
+    for k, piece in enumerate(frusta(p, tube_radii, options.around, f"{name}_frustum")):
+        s = np.where(piece.uvs[:, 1] > 0.5, k + 1.0, float(k))  # each end takes its node's values
+        pieces.append((piece, s, np.broadcast_to(p[k + 1] - p[k], (piece.vertex_count, 3))))
+    if len(p) > 2:
+        spheres = node_spheres(p[1:-1], tube_radii[1:-1], options.around, f"{name}_nodes")
+        for k, sphere in enumerate(_split_spheres(spheres, len(p) - 2)):
+            pieces.append((sphere, np.full(sphere.vertex_count, k + 1.0), np.broadcast_to(t[k + 1], (sphere.vertex_count, 3))))
+    grid = np.arange(len(nodes))
+    result = []
+    for piece, s, direction in pieces:
+        attributes = {"radius": np.interp(s, grid, tube_radii), "segment": np.full(piece.vertex_count, float(index))}
+        if scalar is not None:
+            attributes["scalar"] = np.interp(s, grid, scalar[nodes])
+        colors = None
+        if options.color_by == "direction":
+            from cgamesh.meshing.colors import direction_colors
+
+            colors = direction_colors(direction / np.linalg.norm(direction, axis=1, keepdims=True))
+        result.append(_with(piece, attributes=attributes, colors=colors))
+    return result
+
+
+def _split_spheres(mesh: SurfaceMesh, count: int) -> list[SurfaceMesh]:
+    """A mesh of ``count`` equal spheres (``uv_spheres``) as one mesh per sphere: overlapping
+    spheres must enter a union as separate solids, not as one self-overlapping mesh."""
+    per_vertex, per_face = mesh.vertex_count // count, mesh.triangle_count // count
+    out = []
+    for k in range(count):
+        rows = slice(k * per_vertex, (k + 1) * per_vertex)
+        base = k * per_vertex
+        out.append(SurfaceMesh(
+            name=f"{mesh.name}_{k}", positions=mesh.positions[rows], normals=mesh.normals[rows], uvs=mesh.uvs[rows],
+            faces=np.asarray(mesh.faces[k * per_face:(k + 1) * per_face]) - base,
+            weld=None if mesh.weld is None else np.asarray(mesh.weld[rows]) - base,
+            colors=None if mesh.colors is None else mesh.colors[rows],
+            attributes=None if mesh.attributes is None else {n: a[rows] for n, a in mesh.attributes.items()}))
+    return out
+
+
 def closed_and_oriented(mesh: SurfaceMesh) -> bool:
     """Whether the welded mesh is closed with every edge used once each way (what a boolean
     union needs); a tube that folds over itself has triangles wound against their neighbours."""
@@ -289,6 +337,26 @@ def closed_and_oriented(mesh: SurfaceMesh) -> bool:
     backward = edges[:, 1] * mesh.vertex_count + edges[:, 0]
     unique, counts = np.unique(forward, return_counts=True)
     return bool(np.all(counts == 1) and np.isin(backward, unique).all())
+
+
+def rings_in_order(mesh: SurfaceMesh) -> bool:
+    """Whether each ring of a capped tube's grid (rings of equal size with a repeated seam
+    vertex, then two caps of one ring size each: ``circles._add_cap``) lies wholly ahead of the plane of the ring before it and the
+    one before wholly behind its plane. Where the centreline bends tighter than the radius the
+    inner wall of consecutive rings crosses: the tube is closed and consistently wound, yet
+    its surface passes through itself, and a union of it keeps that self-intersection."""
+    v = mesh.uvs[:, 1]
+    columns = int(np.argmax(v != v[0])) if (v != v[0]).any() else 0
+    grid = mesh.vertex_count - 2 * columns
+    if columns < 4 or grid <= 0 or grid % columns:
+        return False
+    rings = mesh.positions[:grid].reshape(-1, columns, 3)[:, :-1]
+    centre = rings.mean(axis=1)
+    normal = np.cross(rings - centre[:, None], np.roll(rings, -1, axis=1) - centre[:, None]).sum(axis=1)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    ahead = np.einsum("kij,kj->ki", rings[1:] - centre[:-1, None], normal[:-1]).min(axis=1)
+    behind = np.einsum("kij,kj->ki", rings[:-1] - centre[1:, None], normal[1:]).max(axis=1)
+    return bool((ahead > 0.0).all() and (behind < 0.0).all())
 
 
 def node_tangents(p: np.ndarray) -> np.ndarray:
@@ -341,7 +409,12 @@ def _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, optio
     for name, nodes in groups:
         if not len(nodes):
             continue
-        mesh = uv_spheres(points[nodes], radii[nodes], options.around, name=f"{stem}_{name}")
+        scale = 1.0
+        if options.watertight and name == "junctions":
+            from cgamesh.meshing.frusta import enclosing_sphere_scale
+
+            scale = enclosing_sphere_scale(options.around)  # the tubes' rings there lie strictly inside
+        mesh = uv_spheres(points[nodes], radii[nodes] * scale, options.around, name=f"{stem}_{name}")
         per = mesh.vertex_count // len(nodes)
         attributes = {"radius": np.repeat(radii[nodes], per), "segment": np.repeat(segment_of[nodes], per)}
         if name == "soma":
@@ -353,7 +426,8 @@ def _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, optio
             from cgamesh.meshing.colors import direction_colors
 
             colors = direction_colors(np.repeat(tangents[nodes], per, axis=0))
-        meshes.append(_with(mesh, attributes=attributes, colors=colors))
+        mesh = _with(mesh, attributes=attributes, colors=colors)
+        meshes.extend(_split_spheres(mesh, len(nodes)) if options.watertight else [mesh])
     return meshes
 
 

