@@ -287,3 +287,17 @@ def test_nearly_identical_controls_to_a_tolerance_give_no_degenerate_triangles(t
     meshes = read_gltf(tmp_path / "near.glb", world=True)
     assert_finite_unit(meshes)
     assert degenerate_triangles(meshes[0]) == 0
+
+
+def test_opposite_circles_unaligned_interpolating_through_a_line_are_refused_where(tmp_path):
+    """Blade interpolation between circles of opposite orientation (align: false) passes through
+    a line, a circle through infinity; a ring on it (alpha = 1/3 here, ring 13 of 40) is one line
+    naming the surface, segment and alpha, no warning, no NaN."""
+    along = 40
+    path = tmp_path / "opposite.yaml"
+    path.write_text(scene(["{center: [0, 0, 0], normal: [1, 0, 0], radius: 1.0}",
+                           "{center: [1.3416407864998738, 0, 0.6708203932499369], normal: [-1, 0, 0], radius: 0.5}"],
+                          extra=f"    align: false\n    resolution: {{around: 3, along: {along}}}\n"))
+    refused([path, "-o", tmp_path / "o.glb"], r"opposite\.yaml:3: surfaces\[0\]: the interpolated circle is a line "
+                                              r"\(through infinity\) at segment 0, alpha = ")
+    assert not (tmp_path / "o.glb").exists()

@@ -106,6 +106,20 @@ class RingNormals:
         return RingNormals(samples=self.samples, **fields)
 
 
+def _refuse_lines(rings: CircleRings, t: np.ndarray, segment_count: int) -> None:
+    """DegenerateGeometryError where an interpolated circle is a line (its centre and radius at
+    infinity: blade interpolation between controls of opposite orientation, align false)."""
+    line = ~(np.isfinite(rings.centre).all(axis=1) & np.isfinite(rings.radius))
+    if np.any(line):
+        from cgamesh.geometry.curves import split_parameter
+
+        segment, alpha = split_parameter(t[np.flatnonzero(line)[:1]], segment_count)
+        raise DegenerateGeometryError(
+            f"the interpolated circle is a line (through infinity) at segment {int(segment[0])}, "
+            f"alpha = {float(alpha[0]):.3g}; controls of opposite orientation interpolate through one "
+            "(align: true turns them alike)")
+
+
 def _nearby_normals(surface: EvolvedSurface, t: np.ndarray, u: np.ndarray) -> RingNormals:
     """Normals of the rings at parameters t (R,), their phase carried from axes u (R, 3) nearby."""
     rings = CircleRings.from_projection(surface.sample(t), surface.frame)
@@ -310,7 +324,9 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
     if t is None:
         t = np.linspace(0.0, surface.segment_count, along)
     surface.check_projection_exists(sampled=t)
-    rings = CircleRings.from_projection(surface.sample(t), surface.frame)
+    with np.errstate(divide="ignore", invalid="ignore"):  # a line's centre is at infinity: refused below
+        rings = CircleRings.from_projection(surface.sample(t), surface.frame)
+    _refuse_lines(rings, t, surface.segment_count)
     keep = distinct_rings(rings.centre, rings.normal, rings.radius, surface.frame.scale, surface.name) \
         if distinct else np.ones(len(t), dtype=bool)
     if not keep.all():
