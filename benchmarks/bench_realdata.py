@@ -86,15 +86,18 @@ def run_child(code: str, args: list[str]) -> tuple[float, float, float]:
     if BLAS_THREADS:
         env["OPENBLAS_NUM_THREADS"] = env["OMP_NUM_THREADS"] = str(BLAS_THREADS)
     start = time.perf_counter()
-    child = subprocess.Popen([sys.executable, "-c", code, *args], stdout=subprocess.PIPE,
-                             stderr=subprocess.DEVNULL, env=env)
-    output = child.stdout.read().decode()
-    child.stdout.close()
-    _, status, usage = os.wait4(child.pid, 0)
-    seconds = time.perf_counter() - start
-    child.returncode = os.waitstatus_to_exitcode(status)
-    if child.returncode not in (0, 3):
-        raise SystemExit(f"child failed with exit status {child.returncode}: {args}")
+    with tempfile.TemporaryFile() as errors:  # a file, not a pipe: nothing to drain while it runs
+        child = subprocess.Popen([sys.executable, "-c", code, *args], stdout=subprocess.PIPE,
+                                 stderr=errors, env=env)
+        output = child.stdout.read().decode()
+        child.stdout.close()
+        _, status, usage = os.wait4(child.pid, 0)
+        seconds = time.perf_counter() - start
+        child.returncode = os.waitstatus_to_exitcode(status)
+        if child.returncode not in (0, 3):
+            errors.seek(0)
+            tail = errors.read().decode(errors="replace")[-1500:]
+            raise SystemExit(f"child failed with exit status {child.returncode}: {args}\n{tail}")
     peak = [int(line.split()[1]) for line in output.splitlines() if line.startswith("PEAK_KB")]
     return seconds, usage.ru_utime + usage.ru_stime, peak[-1] / 1024.0
 
