@@ -1,0 +1,448 @@
+"""The fast path of the scene reader: plain data at C speed, checked over arrays.
+
+The careful reader (``cgamesh.inputs.scene``) walks PyYAML's node tree to name the line of
+every mistake; that costs about 10 us per node, so a scene of thousands of surfaces reads at
+well under 1 MB/s, with libyaml's C parser too (its nodes and marks are Python objects). Yet
+lines are needed only when something is wrong, plus the line of each surface and control
+(their ``Location``). So reading is two passes:
+
+1. This module accepts a strict subset of YAML, the shape that scene files are written in
+   (block mappings and lists of identifier keys; plain numbers, names and booleans; one-line
+   flow lists and mappings of numbers), rewrites it line by line into JSON with the line of
+   every list item's mapping under the key "" and lets ``json.loads`` build it; then checks
+   every value, numbers as arrays over all controls of the file at once.
+2. Anything it cannot vouch for returns ``None`` (never an error): text outside the subset
+   (quotes, anchors, aliases, tags, block scalars, tabs, multi-line flow, non-ASCII, ...), a
+   duplicate key, or any value the careful reader would refuse. ``parse_scene`` then runs
+   the careful reader, which gives the located one-line error (or, for valid YAML outside the
+   subset, the scene).
+
+So the fast path never decides what an error says: it either returns exactly the ``Scene``
+the careful reader returns (the tests compare both on every example and on generated scenes)
+or steps aside. Its security follows from the subset: no tag, anchor or alias can be
+written in it, so nothing is constructed beyond str, int, float, bool, None, list and dict,
+and nothing expands.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+
+from cgamesh.material import Material
+from cgamesh.inputs import scene as careful
+from cgamesh.inputs.scene import CircleControl, Location, PointPairControl, Scene, SurfaceSpec
+from cgamesh.inputs.scene_rendering import RENDERING_KEYS
+
+# Printable ASCII and line feeds only: no tab (YAML's indentation rules for it are subtle), no
+# carriage return, no byte PyYAML refuses, no Unicode line break (NEL, U+2028) that would
+# shift line numbers.
+_OUTSIDE_SUBSET = re.compile(r"[^\n\x20-\x7e]")
+# A comment starts at '#' at the start of a line or after a space (in the subset no quoted
+# text can hold one).
+_COMMENT = re.compile(r"(^|[ ])#[^\n]*", re.M)
+# Keys: an identifier after a line start, a space, '{' or ',' and followed by ':' and a space
+# or the line end, quoted so that the flow parts become JSON as they stand.
+_KEY = re.compile(r"(^|[ {,])([A-Za-z_][A-Za-z0-9_]*):(?= |$)", re.M)
+# A ':' not followed by a space (PyYAML then reads it as part of a plain scalar).
+_BARE_COLON = re.compile(r":(?! |$)", re.M)
+
+_NUMBER = r"-?(?:0|[1-9][0-9]*)(?:\.[0-9]+)?(?:[eE][-+]?[0-9]+)?"
+_IDENTIFIER = r"[A-Za-z_][A-Za-z0-9_]*"
+# One-line flow collections, nested at most three deep (a mapping of lists of lists, as
+# `through` needs), holding only numbers and keys: the whole value must be one collection.
+_FLOW_ATOM = r'(?:"[A-Za-z_][A-Za-z0-9_]*": |[-+0-9.eE, ])'
+_FLAT_LIST = rf"\[{_FLOW_ATOM}*\]"
+_NESTED_LIST = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*\]"
+_FLOW = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*\]|\{{(?:{_FLOW_ATOM}|{_NESTED_LIST})*\}}"
+# indent, '- ', key, then a flow value, a number, a name, or anything else (outside the subset).
+_LINE = re.compile(rf'^( *)(- +)?(?:"({_IDENTIFIER})":(?: +|$))?'
+                   rf'(?:({_FLOW})|({_NUMBER})|({_IDENTIFIER})|(.+?))? *$', re.M)
+# YAML 1.2 core-schema words (the careful reader's resolution) as JSON literals.
+_WORDS = {word: literal for literal, words in (("true", ("true", "True", "TRUE")),
+                                               ("false", ("false", "False", "FALSE")),
+                                               ("null", ("null", "Null", "NULL")))
+          for word in words}
+
+
+class _OutsideSubset(Exception):
+    """The text or a value is one the fast path does not vouch for."""
+
+
+def read_fast(text: str, path: str, rendering: bool) -> Scene | None:
+    """The scene of ``text`` as ``parse_scene`` would return it, or None when this path
+    cannot vouch for the text (the careful reader then decides)."""
+    document = _plain_document(text)
+    if document is None:
+        return None
+    try:
+        return _scene(document, path, rendering)
+    except _OutsideSubset:
+        return None
+
+
+# --- the YAML subset, as JSON ------------------------------------------------------------------
+
+def _unique_keys(pairs: list) -> dict:
+    mapping = dict(pairs)
+    if len(mapping) != len(pairs):
+        raise _OutsideSubset("a duplicate key")
+    return mapping
+
+
+def _no_constant(name: str):
+    raise _OutsideSubset(name)  # NaN / Infinity: JSON's words, not YAML's
+
+
+def _plain_document(text: str) -> dict | None:
+    """The document as plain data, every mapping that is a list item holding its 1-based line
+    under the key ""; None outside the subset."""
+    if not text.isascii() or _OUTSIDE_SUBSET.search(text) or '"' in text:
+        return None  # quotes: the keys are quoted below, so none may be written
+    text = _KEY.sub(r'\1"\2":', _COMMENT.sub(r"\1", text))
+    if _BARE_COLON.search(text):
+        return None
+    try:
+        pieces = _json_pieces(_LINE.findall(text))
+        return json.loads("".join(pieces), object_pairs_hook=_unique_keys,
+                          parse_constant=_no_constant)
+    except (_OutsideSubset, ValueError, RecursionError):
+        return None
+
+
+def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
+    """JSON text of the block structure; each line is (indent, dash, key, flow, number, name,
+    other) as ``_LINE`` splits it. Raises _OutsideSubset for anything the subset leaves out.
+
+    ``frames`` holds the open block collections as [is_mapping, column, has_items]: a
+    mapping's column is that of its keys, a list's that of its dashes. ``pending`` is the
+    column of a mapping whose last key had no value on its line (a nested block or null)."""
+    out: list[str] = []
+    frames: list[list] = []
+    pending = None
+    for number, (indent, dash, key, flow, numeral, name, other) in enumerate(lines, 1):
+        if other:
+            raise _OutsideSubset(number)
+        if not (dash or key or flow or numeral or name):
+            continue  # blank or comment
+        column = len(indent)
+        if pending is not None:
+            if column > pending or (dash and column == pending):
+                out.append("[" if dash else "{")
+                frames.append([not dash, column, False])
+            else:
+                out.append("null")
+            pending = None
+        while frames and (frames[-1][1] > column or (frames[-1][1] == column and not frames[-1][0]
+                                                     and not dash)):
+            out.append("}" if frames.pop()[0] else "]")
+        if not frames:
+            if out or dash or not key:
+                raise _OutsideSubset(number)  # the document is not one mapping at column 0
+            out.append("{")
+            frames.append([True, 0, False])
+        frame = frames[-1]
+        if frame[1] != column or frame[0] == bool(dash) or not (dash or key):
+            raise _OutsideSubset(number)  # misplaced line: a continuation or an error
+        if frame[2]:
+            out.append(",")
+        frame[2] = True
+        if dash:
+            if key:
+                column += len(dash)
+                out.append(f'{{"":{number}')
+                frames.append([True, column, True])
+                out.append(',')
+            elif flow and flow[0] == "{":
+                if flow[1:].lstrip(" ")[0] == "}":
+                    raise _OutsideSubset(number)  # an empty mapping: rare, left to the careful path
+                out.append(f'{{"":{number},{flow[1:]}')
+                continue
+            else:
+                out.append(_value(flow, numeral, name, number))
+                continue
+        out.append(f'"{key}":')
+        if flow or numeral or name:
+            out.append(_value(flow, numeral, name, number))
+        else:
+            pending = column
+    if pending is not None:
+        out.append("null")
+    out.extend("}" if frame[0] else "]" for frame in reversed(frames))
+    return out
+
+
+def _value(flow: str, numeral: str, name: str, number: int) -> str:
+    if flow or numeral:
+        return flow or numeral
+    if not name:
+        raise _OutsideSubset(number)  # '- ' with nothing after it
+    return _WORDS.get(name) or f'"{name}"'
+
+
+# --- checks over the plain data ----------------------------------------------------------------
+
+_TOP_KEYS = frozenset(careful._TOP_KEYS)
+_SURFACE_KEYS = frozenset(careful._SURFACE_KEYS)
+_CIRCLE_KEYS = frozenset(careful._CIRCLE_KEYS)
+_POINT_PAIR_KEYS = frozenset(careful._POINT_PAIR_KEYS)
+_RESOLUTION_KEYS = frozenset(("around", "along"))
+_MATERIAL_KEYS = frozenset(("color", "roughness", "metallic"))
+_NAME = re.compile(careful.NAME_PATTERN)
+_DEFAULT_MATERIAL = Material()
+
+
+def _check(condition: bool) -> None:
+    if not condition:
+        raise _OutsideSubset("a value the careful reader refuses or reads otherwise")
+
+
+def _number(value: object) -> float:
+    """A finite number, as the careful reader's ``number`` reads it."""
+    kind = type(value)
+    if kind is int:
+        try:
+            value = float(value)
+        except OverflowError:
+            raise _OutsideSubset("a huge integer") from None
+    else:
+        _check(kind is float)
+    _check(value - value == 0.0)  # finite
+    return value
+
+
+def _in(value: object, low: float, high: float) -> float:
+    value = _number(value)
+    _check(low <= value <= high)
+    return value
+
+
+def _choice(entries: dict, key: str, default: str, options: tuple[str, ...]) -> str:
+    value = entries.get(key, default)
+    _check(type(value) is str and value in options)
+    return value
+
+
+def _flag(entries: dict, key: str, default: bool) -> bool:
+    value = entries.get(key, default)
+    _check(type(value) is bool)
+    return value
+
+
+def _scene(document: dict, path: str, rendering: bool) -> Scene:
+    _check(type(document) is dict and document.keys() <= _TOP_KEYS)
+    if rendering:
+        # The rendering keys are few and small: the careful reader reads them.
+        _check(not any(key in document for key in RENDERING_KEYS))
+    version = document.get("cgamesh")
+    _check(type(version) is int and version in careful.SUPPORTED_VERSIONS)
+    units = _choice(document, "units", "m", tuple(careful.METERS_PER_UNIT))
+    up = _choice(document, "up", "z", careful.UP_AXES)
+    items = document.get("surfaces")
+    _check(type(items) is list and len(items) > 0)
+    names: set[str] = set()
+    controls = _Controls()
+    parts = [_surface(item, f"surfaces[{i}]", names, controls, path) for i, item in enumerate(items)]
+    built = tuple(controls.build(path))
+    surfaces = tuple(SurfaceSpec(*fields[:8], built[first:last], *fields[8:])
+                     for fields, first, last in parts)
+    return Scene(path, version, units, careful.METERS_PER_UNIT[units], up, surfaces)
+
+
+def _surface(entries: object, key_path: str, names: set[str], controls: _Controls,
+             path: str) -> tuple[tuple, int, int]:
+    """A surface's fields but its controls (added to ``controls``), and the range of its
+    controls there."""
+    _check(type(entries) is dict)
+    line = entries.pop("", None)
+    _check(line is not None and entries.keys() <= _SURFACE_KEYS)
+    name = entries.get("name")
+    _check(type(name) is str and _NAME.fullmatch(name) is not None and name not in names)
+    names.add(name)
+    kind = _choice(entries, "type", None, careful.SURFACE_TYPES)
+    curve = _choice(entries, "curve", None, careful.CURVES)
+    tension, bias, continuity = (_kb_parameter(entries, key, curve)
+                                 for key in ("tension", "bias", "continuity"))
+    closed = _flag(entries, "closed", False)
+    align = _flag(entries, "align", True)
+    caps = _flag(entries, "caps", False)
+    _check(not closed or curve in careful.CLOSABLE_CURVES)
+    _check(not caps or (kind == "circles" and not closed))
+    interpolation = _choice(entries, "interpolation", "blade", careful.INTERPOLATIONS)
+    _check(interpolation == "blade" or kind == "circles")
+    first = len(controls.items)
+    controls.add(entries.get("controls"), kind, curve, closed, key_path)
+    around, along, tolerance = _resolution(entries, kind)
+    material = _material(entries.get("material", _DEFAULT_MATERIAL))
+    uv = _choice(entries, "uv", "natural", careful.UV_MODES)
+    uv_scale = None
+    if "uv_scale" in entries:
+        uv_scale = _number(entries["uv_scale"])
+        _check(uv == "natural" and uv_scale > 0.0)
+    fields = (name, kind, curve, tension, bias, continuity, closed, align,
+              around, along, tolerance, caps, material, Location(path, line, key_path), uv,
+              uv_scale, interpolation)
+    return fields, first, len(controls.items)
+
+
+def _kb_parameter(entries: dict, key: str, curve: str) -> float:
+    if key not in entries:
+        return 0.0
+    _check(curve == "kb")
+    return _in(entries[key], -1.0, 1.0)
+
+
+def _resolution(entries: dict, kind: str) -> tuple[int | None, int | None, float | None]:
+    if "tolerance" in entries:
+        _check("resolution" not in entries)
+        tolerance = _number(entries["tolerance"])
+        _check(tolerance > 0.0)
+        return None, None, tolerance
+    if "resolution" not in entries:
+        return careful.DEFAULT_AROUND, careful.DEFAULT_ALONG, None
+    resolution = entries["resolution"]
+    _check(type(resolution) is dict and resolution.keys() <= _RESOLUTION_KEYS)
+    around = resolution.get("around", careful.DEFAULT_AROUND)
+    along = resolution.get("along", careful.DEFAULT_ALONG)
+    least_around = 3 if kind == "circles" else 2
+    _check(type(around) is int and least_around <= around <= careful.MAX_RESOLUTION)
+    _check(type(along) is int and 2 <= along <= careful.MAX_RESOLUTION)
+    return around, along, None
+
+
+def _material(entries: object) -> Material:
+    if entries is _DEFAULT_MATERIAL:
+        return entries
+    _check(type(entries) is dict and entries.keys() <= _MATERIAL_KEYS)
+    color = _DEFAULT_MATERIAL.color
+    if "color" in entries:
+        values = entries["color"]
+        _check(type(values) is list and len(values) == 3)
+        color = tuple(_in(value, 0.0, 1.0) for value in values)
+    roughness = _in(entries.get("roughness", _DEFAULT_MATERIAL.roughness), 0.0, 1.0)
+    metallic = _in(entries.get("metallic", _DEFAULT_MATERIAL.metallic), 0.0, 1.0)
+    return Material(color, roughness, metallic)
+
+
+class _Controls:
+    """Every control of the file, gathered so that their numbers are checked as arrays."""
+
+    def __init__(self) -> None:
+        self.items: list[tuple] = []  # (form, line, key path, weight, index into its arrays)
+        self.centers: list = []
+        self.normals: list = []
+        self.radii: list = []
+        self.ends_a: list = []
+        self.ends_b: list = []
+
+    def add(self, items: object, kind: str, curve: str, closed: bool, key_path: str) -> None:
+        _check(type(items) is list and len(items) >= (3 if closed else 2))
+        allowed = _CIRCLE_KEYS if kind == "circles" else _POINT_PAIR_KEYS
+        weights = []
+        for i, entries in enumerate(items):
+            _check(type(entries) is dict)
+            line = entries.pop("", None)
+            _check(line is not None and entries.keys() <= allowed)
+            weight = 1.0
+            if "weight" in entries:
+                _check(curve == "rational_bezier")
+                weight = _number(entries["weight"])
+                _check(weight > 0.0)
+            weights.append(weight)
+            where = f"{key_path}.controls[{i}]"
+            if kind != "circles":
+                self.items.append(("pair", line, where, weight, len(self.ends_a)))
+                self.ends_a.append(entries.get("a"))
+                self.ends_b.append(entries.get("b"))
+            elif "through" in entries:
+                _check(entries.keys().isdisjoint(("center", "normal", "radius")))
+                self.items.append(("through", line, where, weight, _through(entries["through"])))
+            else:
+                self.items.append(("circle", line, where, weight, len(self.centers)))
+                self.centers.append(entries.get("center"))
+                self.normals.append(entries.get("normal"))
+                self.radii.append(entries.get("radius"))
+        largest = max(weights)
+        _check(all(weight * careful.MAX_WEIGHT_RATIO >= largest for weight in weights))
+
+    def build(self, path: str) -> list[CircleControl | PointPairControl]:
+        centers = _lengths(self.centers, (len(self.centers), 3))
+        normals = _numbers(self.normals, (len(self.normals), 3))
+        _check(bool(np.all(np.any(normals != 0.0, axis=1))))
+        radii = _lengths(self.radii, (len(self.radii),))
+        _check(bool(np.all(radii > 0.0)))
+        ends_a = _lengths(self.ends_a, (len(self.ends_a), 3))
+        ends_b = _lengths(self.ends_b, (len(self.ends_b), 3))
+        for i in np.flatnonzero(_maybe_coincident(ends_a, ends_b)):
+            _check(not careful._coincident(tuple(ends_a[i].tolist()), tuple(ends_b[i].tolist())))
+        centers, normals, radii = centers.tolist(), normals.tolist(), radii.tolist()
+        ends_a, ends_b = ends_a.tolist(), ends_b.tolist()
+        built = []
+        for form, line, where, weight, index in self.items:
+            location = Location(path, line, where)
+            if form == "circle":
+                built.append(CircleControl(tuple(centers[index]), tuple(normals[index]),
+                                           radii[index], None, weight, location))
+            elif form == "pair":
+                built.append(PointPairControl(tuple(ends_a[index]), tuple(ends_b[index]), weight,
+                                              location))
+            else:
+                built.append(CircleControl(None, None, None, index, weight, location))
+        return built
+
+
+def _numbers(values: list, shape: tuple[int, ...]) -> np.ndarray:
+    """``values`` as a float64 array of ``shape``, all finite; ints read as the careful
+    reader reads them (float(int)), anything else (bool, text, None, a huge int) refused."""
+    if not values:
+        return np.zeros(shape)
+    try:
+        array = np.array(values)
+    except (ValueError, TypeError):
+        raise _OutsideSubset("ragged") from None
+    # The subset's flow collections hold only numbers, so a list of numbers is int64 or float64;
+    # anything else (None for a missing key, a nested list, a huge int) is object or another shape.
+    _check(array.shape == shape and array.dtype.kind in "if")
+    array = array.astype(np.float64)
+    _check(bool(np.all(np.isfinite(array))))
+    return array
+
+
+def _lengths(values: list, shape: tuple[int, ...]) -> np.ndarray:
+    array = _numbers(values, shape)
+    _check(bool(np.all(np.abs(array) <= careful.MAX_LENGTH)))
+    return array
+
+
+def _maybe_coincident(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Rows where a and b may be coincident by the careful reader's test (a tenfold margin over
+    its 1e-12 for rounding); only those go through the exact, scalar test."""
+    scale = np.maximum(np.abs(a).max(axis=1, initial=0.0), np.abs(b).max(axis=1, initial=0.0))
+    safe = np.where(scale > 0.0, scale, 1.0)[:, None]
+    a, b = a / safe, b / safe
+    gap = np.linalg.norm(a - b, axis=1)
+    size = np.maximum(np.maximum(np.linalg.norm(a, axis=1), np.linalg.norm(b, axis=1)), 1e-300)
+    return gap <= 10.0 * careful._DEGENERATE_RTOL * size
+
+
+def _through(value: object) -> tuple:
+    """The careful reader's checks of ``through``, the same scalar functions (few in a file)."""
+    _check(type(value) is list and len(value) == 3)
+    points = tuple(tuple(_length(c) for c in _triple(point)) for point in value)
+    for i, j in ((0, 1), (0, 2), (1, 2)):
+        _check(not careful._coincident(points[i], points[j]))
+    _check(not careful._collinear(*points))
+    return points
+
+
+def _triple(value: object) -> list:
+    _check(type(value) is list and len(value) == 3)
+    return value
+
+
+def _length(value: object) -> float:
+    value = _number(value)
+    _check(abs(value) <= careful.MAX_LENGTH)
+    return value
