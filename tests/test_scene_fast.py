@@ -232,3 +232,13 @@ def test_generated_scenes_read_the_same_by_both_readers(text):
     assert outcome(text, True, rendering=False) == careful
     if not isinstance(careful, tuple):  # valid: the fast path itself must have read it
         assert read_fast(text, "scene.yaml", False) == careful
+
+
+def test_the_reader_benchmark_runs_at_a_small_size_and_both_readers_agree():
+    import subprocess
+    import sys
+    script = Path(__file__).parent.parent / "benchmarks" / "bench_scene_reader.py"
+    result = subprocess.run([sys.executable, str(script), "--surfaces", "20", "--repeats", "1"],
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.count("fast path ") == 2 and "DIFFER" not in result.stderr

@@ -36,29 +36,25 @@ from cgamesh.inputs import scene as careful
 from cgamesh.inputs.scene import CircleControl, Location, PointPairControl, Scene, SurfaceSpec
 from cgamesh.inputs.scene_rendering import RENDERING_KEYS
 
-# Printable ASCII and line feeds only: no tab (YAML's indentation rules for it are subtle), no
-# carriage return, no byte PyYAML refuses, no Unicode line break (NEL, U+2028) that would
-# shift line numbers.
-_OUTSIDE_SUBSET = re.compile(r"[^\n\x20-\x7e]")
 # A comment starts at '#' at the start of a line or after a space (in the subset no quoted
 # text can hold one).
-_COMMENT = re.compile(r"(^|[ ])#[^\n]*", re.M)
-# Keys: an identifier after a line start, a space, '{' or ',' and followed by ':' and a space
-# or the line end, quoted so that the flow parts become JSON as they stand.
-_KEY = re.compile(r"(^|[ {,])([A-Za-z_][A-Za-z0-9_]*):(?= |$)", re.M)
-# A ':' not followed by a space (PyYAML then reads it as part of a plain scalar).
-_BARE_COLON = re.compile(r":(?! |$)", re.M)
+_COMMENT = re.compile(r"(?<![^ \n])#[^\n]*")
+# The keys of flow mappings after the first: ', ' then an identifier (a number in a list
+# starts with a digit or '-'). Every key ends in ': ' or ':' at the line end.
+_NEXT_KEY = re.compile(r", (?=[A-Za-z_])")
+_INNER_COLON = re.compile(r":(?![ \n])")
 
 _NUMBER = r"-?(?:0|[1-9][0-9]*)(?:\.[0-9]+)?(?:[eE][-+]?[0-9]+)?"
 _IDENTIFIER = r"[A-Za-z_][A-Za-z0-9_]*"
 # One-line flow collections, nested at most three deep (a mapping of lists of lists, as
-# `through` needs), holding only numbers and keys: the whole value must be one collection.
-_FLOW_ATOM = r'(?:"[A-Za-z_][A-Za-z0-9_]*": |[-+0-9.eE, ])'
-_FLAT_LIST = rf"\[{_FLOW_ATOM}*\]"
-_NESTED_LIST = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*\]"
-_FLOW = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*\]|\{{(?:{_FLOW_ATOM}|{_NESTED_LIST})*\}}"
+# `through` needs), holding only numbers and (quoted) keys: the whole value must be one
+# collection, so that '[1], [2]' is not read as two. Possessive: no backtracking.
+_FLOW_ATOM = r'(?:[-+0-9.eE, ]++|"[A-Za-z_][A-Za-z0-9_]*": )'
+_FLAT_LIST = rf"\[{_FLOW_ATOM}*+\]"
+_NESTED_LIST = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*+\]"
+_FLOW = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*+\]|\{{(?:{_FLOW_ATOM}|{_NESTED_LIST})*+\}}"
 # indent, '- ', key, then a flow value, a number, a name, or anything else (outside the subset).
-_LINE = re.compile(rf'^( *)(- +)?(?:"({_IDENTIFIER})":(?: +|$))?'
+_LINE = re.compile(rf'^( *)(- +)?(?:({_IDENTIFIER})":(?: +|$))?'
                    rf'(?:({_FLOW})|({_NUMBER})|({_IDENTIFIER})|(.+?))? *$', re.M)
 # YAML 1.2 core-schema words (the careful reader's resolution) as JSON literals.
 _WORDS = {word: literal for literal, words in (("true", ("true", "True", "TRUE")),
@@ -99,10 +95,8 @@ def _no_constant(name: str):
 def _plain_document(text: str) -> dict | None:
     """The document as plain data, every mapping that is a list item holding its 1-based line
     under the key ""; None outside the subset."""
-    if not text.isascii() or _OUTSIDE_SUBSET.search(text) or '"' in text:
-        return None  # quotes: the keys are quoted below, so none may be written
-    text = _KEY.sub(r'\1"\2":', _COMMENT.sub(r"\1", text))
-    if _BARE_COLON.search(text):
+    text = _keys_quoted(text)
+    if text is None:
         return None
     try:
         pieces = _json_pieces(_LINE.findall(text))
@@ -110,6 +104,27 @@ def _plain_document(text: str) -> dict | None:
                           parse_constant=_no_constant)
     except (_OutsideSubset, ValueError, RecursionError):
         return None
+
+
+def _keys_quoted(text: str) -> str | None:
+    """The text without comments and with its keys quoted; None if it cannot be in the subset."""
+    # Printable ASCII and line feeds only: no tab (YAML's indentation rules for it are
+    # subtle), no carriage return, no byte PyYAML refuses, no Unicode line break (NEL, U+2028)
+    # that would shift line numbers; no quote, as the keys are quoted here.
+    if not (text.isascii() and text.replace("\n", "").isprintable()) or '"' in text:
+        return None
+    if "#" in text:
+        text = _COMMENT.sub("", text)
+    # Quote the keys, so that flow collections are JSON as they stand: a '"' before the first
+    # key of a flow mapping and the keys after ', ', and one before every ': ' / ':' at a
+    # line end. In the subset ':' appears only after keys (PyYAML reads a ':' followed by
+    # anything else as part of a plain scalar), so a stray quote only makes the JSON invalid.
+    if not text.endswith("\n"):
+        text += "\n"
+    if _INNER_COLON.search(text):
+        return None  # a ':' inside a plain scalar
+    text = _NEXT_KEY.sub(', "', text.replace("{", '{"')).replace(": ", '": ')
+    return text.replace(":\n", '":\n')
 
 
 def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
@@ -231,8 +246,22 @@ def _flag(entries: dict, key: str, default: bool) -> bool:
     return value
 
 
+def _frozen(cls: type, fields: dict):
+    """``cls(**fields)`` for a frozen dataclass without __post_init__: its generated __init__
+    sets each field with object.__setattr__; one assignment of the instance dict does the same
+    for all fields at once, at half the cost (which counts over thousands of controls)."""
+    instance = _new(cls)
+    _set(instance, "__dict__", fields)
+    return instance
+
+
+_new, _set = object.__new__, object.__setattr__
+for _cls in (Location, CircleControl, PointPairControl, SurfaceSpec):
+    assert not hasattr(_cls, "__post_init__")
+
+
 def _scene(document: dict, path: str, rendering: bool) -> Scene:
-    _check(type(document) is dict and document.keys() <= _TOP_KEYS)
+    _check(type(document) is dict and _TOP_KEYS.issuperset(document))
     if rendering:
         # The rendering keys are few and small: the careful reader reads them.
         _check(not any(key in document for key in RENDERING_KEYS))
@@ -243,47 +272,53 @@ def _scene(document: dict, path: str, rendering: bool) -> Scene:
     items = document.get("surfaces")
     _check(type(items) is list and len(items) > 0)
     names: set[str] = set()
-    controls = _Controls()
-    parts = [_surface(item, f"surfaces[{i}]", names, controls, path) for i, item in enumerate(items)]
-    built = tuple(controls.build(path))
-    surfaces = tuple(SurfaceSpec(*fields[:8], built[first:last], *fields[8:])
-                     for fields, first, last in parts)
-    return Scene(path, version, units, careful.METERS_PER_UNIT[units], up, surfaces)
+    controls = _Controls(path)
+    parts = [_surface(item, i, names, controls, path) for i, item in enumerate(items)]
+    built = tuple(controls.build())
+    surfaces = []
+    for fields, first, last in parts:
+        fields["controls"] = built[first:last]
+        surfaces.append(_frozen(SurfaceSpec, fields))
+    return Scene(path, version, units, careful.METERS_PER_UNIT[units], up, tuple(surfaces))
 
 
-def _surface(entries: object, key_path: str, names: set[str], controls: _Controls,
-             path: str) -> tuple[tuple, int, int]:
+def _surface(entries: object, index: int, names: set[str], controls: _Controls,
+             path: str) -> tuple[dict, int, int]:
     """A surface's fields but its controls (added to ``controls``), and the range of its
     controls there."""
     _check(type(entries) is dict)
     line = entries.pop("", None)
-    _check(line is not None and entries.keys() <= _SURFACE_KEYS)
-    name = entries.get("name")
-    _check(type(name) is str and _NAME.fullmatch(name) is not None and name not in names)
+    _check(line is not None and _SURFACE_KEYS.issuperset(entries))
+    get = entries.get
+    name, kind, curve = get("name"), get("type"), get("curve")
+    _check(type(name) is str and _NAME.fullmatch(name) is not None and name not in names
+           and kind in careful.SURFACE_TYPES and curve in careful.CURVES
+           and type(kind) is str and type(curve) is str)
     names.add(name)
-    kind = _choice(entries, "type", None, careful.SURFACE_TYPES)
-    curve = _choice(entries, "curve", None, careful.CURVES)
-    tension, bias, continuity = (_kb_parameter(entries, key, curve)
-                                 for key in ("tension", "bias", "continuity"))
-    closed = _flag(entries, "closed", False)
-    align = _flag(entries, "align", True)
-    caps = _flag(entries, "caps", False)
+    closed, align, caps = get("closed", False), get("align", True), get("caps", False)
+    _check(type(closed) is bool and type(align) is bool and type(caps) is bool)
     _check(not closed or curve in careful.CLOSABLE_CURVES)
     _check(not caps or (kind == "circles" and not closed))
     interpolation = _choice(entries, "interpolation", "blade", careful.INTERPOLATIONS)
     _check(interpolation == "blade" or kind == "circles")
     first = len(controls.items)
-    controls.add(entries.get("controls"), kind, curve, closed, key_path)
+    key_path = f"surfaces[{index}]"
+    controls.add(get("controls"), kind, curve, closed, key_path)
     around, along, tolerance = _resolution(entries, kind)
-    material = _material(entries.get("material", _DEFAULT_MATERIAL))
+    material = _material(get("material", _DEFAULT_MATERIAL))
     uv = _choice(entries, "uv", "natural", careful.UV_MODES)
     uv_scale = None
     if "uv_scale" in entries:
         uv_scale = _number(entries["uv_scale"])
         _check(uv == "natural" and uv_scale > 0.0)
-    fields = (name, kind, curve, tension, bias, continuity, closed, align,
-              around, along, tolerance, caps, material, Location(path, line, key_path), uv,
-              uv_scale, interpolation)
+    fields = {"name": name, "type": kind, "curve": curve,
+              "tension": _kb_parameter(entries, "tension", curve),
+              "bias": _kb_parameter(entries, "bias", curve),
+              "continuity": _kb_parameter(entries, "continuity", curve),
+              "closed": closed, "align": align, "controls": None, "around": around,
+              "along": along, "tolerance": tolerance, "caps": caps, "material": material,
+              "location": _frozen(Location, {"file": path, "line": line, "key_path": key_path}),
+              "uv": uv, "uv_scale": uv_scale, "interpolation": interpolation}
     return fields, first, len(controls.items)
 
 
@@ -303,7 +338,7 @@ def _resolution(entries: dict, kind: str) -> tuple[int | None, int | None, float
     if "resolution" not in entries:
         return careful.DEFAULT_AROUND, careful.DEFAULT_ALONG, None
     resolution = entries["resolution"]
-    _check(type(resolution) is dict and resolution.keys() <= _RESOLUTION_KEYS)
+    _check(type(resolution) is dict and _RESOLUTION_KEYS.issuperset(resolution))
     around = resolution.get("around", careful.DEFAULT_AROUND)
     along = resolution.get("along", careful.DEFAULT_ALONG)
     least_around = 3 if kind == "circles" else 2
@@ -315,7 +350,7 @@ def _resolution(entries: dict, kind: str) -> tuple[int | None, int | None, float
 def _material(entries: object) -> Material:
     if entries is _DEFAULT_MATERIAL:
         return entries
-    _check(type(entries) is dict and entries.keys() <= _MATERIAL_KEYS)
+    _check(type(entries) is dict and _MATERIAL_KEYS.issuperset(entries))
     color = _DEFAULT_MATERIAL.color
     if "color" in entries:
         values = entries["color"]
@@ -329,7 +364,8 @@ def _material(entries: object) -> Material:
 class _Controls:
     """Every control of the file, gathered so that their numbers are checked as arrays."""
 
-    def __init__(self) -> None:
+    def __init__(self, path: str) -> None:
+        self.path = path
         self.items: list[tuple] = []  # (form, line, key path, weight, index into its arrays)
         self.centers: list = []
         self.normals: list = []
@@ -339,35 +375,41 @@ class _Controls:
 
     def add(self, items: object, kind: str, curve: str, closed: bool, key_path: str) -> None:
         _check(type(items) is list and len(items) >= (3 if closed else 2))
-        allowed = _CIRCLE_KEYS if kind == "circles" else _POINT_PAIR_KEYS
+        circles = kind == "circles"
+        allowed = _CIRCLE_KEYS if circles else _POINT_PAIR_KEYS
+        rational = curve == "rational_bezier"
         weights = []
+        append = self.items.append
         for i, entries in enumerate(items):
             _check(type(entries) is dict)
             line = entries.pop("", None)
-            _check(line is not None and entries.keys() <= allowed)
+            _check(line is not None and allowed.issuperset(entries))
             weight = 1.0
             if "weight" in entries:
-                _check(curve == "rational_bezier")
+                _check(rational)
                 weight = _number(entries["weight"])
                 _check(weight > 0.0)
-            weights.append(weight)
+                weights.append(weight)
             where = f"{key_path}.controls[{i}]"
-            if kind != "circles":
-                self.items.append(("pair", line, where, weight, len(self.ends_a)))
+            if not circles:
+                append(("pair", line, where, weight, len(self.ends_a)))
                 self.ends_a.append(entries.get("a"))
                 self.ends_b.append(entries.get("b"))
             elif "through" in entries:
                 _check(entries.keys().isdisjoint(("center", "normal", "radius")))
-                self.items.append(("through", line, where, weight, _through(entries["through"])))
+                append(("through", line, where, weight, _through(entries["through"])))
             else:
-                self.items.append(("circle", line, where, weight, len(self.centers)))
+                append(("circle", line, where, weight, len(self.centers)))
                 self.centers.append(entries.get("center"))
                 self.normals.append(entries.get("normal"))
                 self.radii.append(entries.get("radius"))
-        largest = max(weights)
-        _check(all(weight * careful.MAX_WEIGHT_RATIO >= largest for weight in weights))
+        if weights:
+            if len(weights) < len(items):
+                weights.append(1.0)  # the controls given no weight
+            largest = max(weights)
+            _check(all(weight * careful.MAX_WEIGHT_RATIO >= largest for weight in weights))
 
-    def build(self, path: str) -> list[CircleControl | PointPairControl]:
+    def build(self) -> list[CircleControl | PointPairControl]:
         centers = _lengths(self.centers, (len(self.centers), 3))
         normals = _numbers(self.normals, (len(self.normals), 3))
         _check(bool(np.all(np.any(normals != 0.0, axis=1))))
@@ -377,19 +419,31 @@ class _Controls:
         ends_b = _lengths(self.ends_b, (len(self.ends_b), 3))
         for i in np.flatnonzero(_maybe_coincident(ends_a, ends_b)):
             _check(not careful._coincident(tuple(ends_a[i].tolist()), tuple(ends_b[i].tolist())))
-        centers, normals, radii = centers.tolist(), normals.tolist(), radii.tolist()
-        ends_a, ends_b = ends_a.tolist(), ends_b.tolist()
+        centers, normals = list(map(tuple, centers.tolist())), list(map(tuple, normals.tolist()))
+        ends_a, ends_b = list(map(tuple, ends_a.tolist())), list(map(tuple, ends_b.tolist()))
+        radii = radii.tolist()
+        path = self.path
         built = []
+        append = built.append
+        new, assign = _new, _set
         for form, line, where, weight, index in self.items:
-            location = Location(path, line, where)
+            location = new(Location)
+            assign(location, "__dict__", {"file": path, "line": line, "key_path": where})
             if form == "circle":
-                built.append(CircleControl(tuple(centers[index]), tuple(normals[index]),
-                                           radii[index], None, weight, location))
+                control = new(CircleControl)
+                assign(control, "__dict__", {
+                    "center": centers[index], "normal": normals[index], "radius": radii[index],
+                    "through": None, "weight": weight, "location": location})
             elif form == "pair":
-                built.append(PointPairControl(tuple(ends_a[index]), tuple(ends_b[index]), weight,
-                                              location))
+                control = new(PointPairControl)
+                assign(control, "__dict__", {"a": ends_a[index], "b": ends_b[index],
+                                             "weight": weight, "location": location})
             else:
-                built.append(CircleControl(None, None, None, index, weight, location))
+                control = new(CircleControl)
+                assign(control, "__dict__", {
+                    "center": None, "normal": None, "radius": None, "through": index,
+                    "weight": weight, "location": location})
+            append(control)
         return built
 
 
