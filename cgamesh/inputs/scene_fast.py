@@ -29,6 +29,8 @@ from __future__ import annotations
 import gc
 import json
 import re
+from collections import deque
+from itertools import repeat
 
 import numpy as np
 
@@ -50,12 +52,12 @@ _IDENTIFIER = r"[A-Za-z_][A-Za-z0-9_]*"
 # One-line flow collections, nested at most three deep (a mapping of lists of lists, as
 # `through` needs), holding only numbers and (quoted) keys: the whole value must be one
 # collection, so that '[1], [2]' is not read as two. Possessive: no backtracking.
-_FLOW_ATOM = r'(?:[-+0-9.eE, ]++|"[A-Za-z_][A-Za-z0-9_]*": )'
+_FLOW_ATOM = r'(?:[-+0-9.eE, ]++|"[A-Za-z_][A-Za-z0-9_]*: )'
 _FLAT_LIST = rf"\[{_FLOW_ATOM}*+\]"
 _NESTED_LIST = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*+\]"
 _FLOW = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*+\]|\{{(?:{_FLOW_ATOM}|{_NESTED_LIST})*+\}}"
 # indent, '- ', key, then a flow value, a number, a name, or anything else (outside the subset).
-_LINE = re.compile(rf'^( *)(- +)?(?:({_IDENTIFIER})":(?: +|$))?'
+_LINE = re.compile(rf'^( *)(- +)?(?:({_IDENTIFIER}):(?: +|$))?'
                    rf'(?:({_FLOW})|({_NUMBER})|({_IDENTIFIER})|(.+?))? *$', re.M)
 # YAML 1.2 core-schema words (the careful reader's resolution) as JSON literals.
 _WORDS = {word: literal for literal, words in (("true", ("true", "True", "TRUE")),
@@ -116,7 +118,8 @@ def _plain_document(text: str) -> dict | None:
 
 
 def _keys_quoted(text: str) -> str | None:
-    """The text without comments and with its keys quoted; None if it cannot be in the subset."""
+    """The text without comments, the quotes of its flow keys opened; None if it cannot be in
+    the subset."""
     # Printable ASCII and line feeds only: no tab (YAML's indentation rules for it are
     # subtle), no carriage return, no byte PyYAML refuses, no Unicode line break (NEL, U+2028)
     # that would shift line numbers; no quote, as the keys are quoted here.
@@ -124,86 +127,94 @@ def _keys_quoted(text: str) -> str | None:
         return None
     if "#" in text:
         text = _COMMENT.sub("", text)
-    # Quote the keys, so that flow collections are JSON as they stand: a '"' before the first
-    # key of a flow mapping and the keys after ', ', and one before every ': ' / ':' at a
-    # line end. In the subset ':' appears only after keys (PyYAML reads a ':' followed by
-    # anything else as part of a plain scalar), so a stray quote only makes the JSON invalid.
+    # Open the quotes of the keys of flow mappings: a '"' before the first key and before the
+    # keys after ', '; each flow value's ': ' closes them (``_json_pieces``). In the subset
+    # ':' appears only after keys (PyYAML reads a ':' followed by anything else as part of a
+    # plain scalar), so a stray quote only makes the JSON invalid.
     if not text.endswith("\n"):
         text += "\n"
     if _INNER_COLON.search(text):
         return None  # a ':' inside a plain scalar
-    text = _NEXT_KEY.sub(', "', text.replace("{", '{"')).replace(": ", '": ')
-    return text.replace(":\n", '":\n')
+    return _NEXT_KEY.sub(', "', text.replace("{", '{"'))
 
 
 def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
     """JSON text of the block structure; each line is (indent, dash, key, flow, number, name,
     other) as ``_LINE`` splits it. Raises _OutsideSubset for anything the subset leaves out.
 
-    ``frames`` holds the open block collections as [is_mapping, column, has_items]: a
-    mapping's column is that of its keys, a list's that of its dashes. ``pending`` is the
-    column of a mapping whose last key had no value on its line (a nested block or null)."""
+    The innermost open block collection is (``mapping``, ``column``, ``items``): a mapping's
+    column is that of its keys, a list's that of its dashes, ``items`` whether it has one yet
+    (for the commas); ``outer`` holds the enclosing ones. ``pending`` is the column of a
+    mapping whose last key had no value on its line (a nested block follows, or null)."""
     out: list[str] = []
-    frames: list[list] = []
-    pending = None
-    for number, (indent, dash, key, flow, numeral, name, other) in enumerate(lines, 1):
+    append = out.append
+    outer: list[tuple[bool, int, bool]] = []
+    mapping, column_open, items = True, -1, False  # column -1: the document is not open yet
+    pending = -1
+    number = 0
+    for indent, dash, key, flow, numeral, name, other in lines:
+        number += 1
         if other:
             raise _OutsideSubset(number)
-        if not (dash or key or flow or numeral or name):
+        if not (dash or key):
+            if flow or numeral or name:
+                raise _OutsideSubset(number)  # a value alone on its line: a continuation
             continue  # blank or comment
         column = len(indent)
-        if pending is not None:
+        if pending >= 0:
             if column > pending or (dash and column == pending):
-                out.append("[" if dash else "{")
-                frames.append([not dash, column, False])
+                outer.append((mapping, column_open, True))
+                mapping, column_open, items = not dash, column, False
+                append("[" if dash else "{")
             else:
-                out.append("null")
-            pending = None
-        while frames and (frames[-1][1] > column or (frames[-1][1] == column and not frames[-1][0]
-                                                     and not dash)):
-            out.append("}" if frames.pop()[0] else "]")
-        if not frames:
-            if out or dash or not key:
-                raise _OutsideSubset(number)  # the document is not one mapping at column 0
-            out.append("{")
-            frames.append([True, 0, False])
-        frame = frames[-1]
-        if frame[1] != column or frame[0] == bool(dash) or not (dash or key):
-            raise _OutsideSubset(number)  # misplaced line: a continuation or an error
-        if frame[2]:
-            out.append(",")
-        frame[2] = True
+                append("null")
+            pending = -1
+        while column_open > column or (column_open == column and not mapping and not dash):
+            append("}" if mapping else "]")  # a list at a key's column ends there too
+            mapping, column_open, items = outer.pop()
+        if column_open < 0:
+            if out or dash or column:
+                raise _OutsideSubset(number)  # the document is not one block mapping
+            append("{")
+            mapping, column_open = True, 0
+        elif column_open != column or mapping == bool(dash):
+            raise _OutsideSubset(number)  # misplaced line
+        if items:
+            append(",")
+        items = True
         if dash:
-            if key:
-                column += len(dash)
-                out.append(f'{{"":{number}')
-                frames.append([True, column, True])
-                out.append(',')
-            elif flow and flow[0] == "{":
-                if flow[1:].lstrip(" ")[0] == "}":
-                    raise _OutsideSubset(number)  # an empty mapping: rare, left to the careful path
-                out.append(f'{{"":{number},{flow[1:]}')
+            if not key:
+                if flow:
+                    flow = flow.replace(": ", '": ')
+                    # A flow mapping as a list item: its line goes in first.
+                    append(f'{{"":{number},{flow[1:]}' if flow[0] == "{" else flow)
+                elif numeral:
+                    append(numeral)
+                elif name:
+                    append(_WORDS.get(name) or f'"{name}"')
+                else:
+                    raise _OutsideSubset(number)  # '-' alone: rare, left to the careful path
                 continue
-            else:
-                out.append(_value(flow, numeral, name, number))
-                continue
-        out.append(f'"{key}":')
-        if flow or numeral or name:
-            out.append(_value(flow, numeral, name, number))
+            outer.append((mapping, column_open, True))
+            mapping, column_open = True, column + len(dash)
+            append(f'{{"":{number},"{key}":')
         else:
-            pending = column
-    if pending is not None:
-        out.append("null")
-    out.extend("}" if frame[0] else "]" for frame in reversed(frames))
+            append(f'"{key}":')
+        if flow:
+            append(flow.replace(": ", '": '))
+        elif numeral:
+            append(numeral)
+        elif name:
+            append(_WORDS.get(name) or f'"{name}"')
+        else:
+            pending = column_open
+    if column_open < 0:
+        raise _OutsideSubset("an empty document")
+    if pending >= 0:
+        append("null")
+    append("}" if mapping else "]")
+    out.extend("}" if frame[0] else "]" for frame in reversed(outer))
     return out
-
-
-def _value(flow: str, numeral: str, name: str, number: int) -> str:
-    if flow or numeral:
-        return flow or numeral
-    if not name:
-        raise _OutsideSubset(number)  # '- ' with nothing after it
-    return _WORDS.get(name) or f'"{name}"'
 
 
 # --- checks over the plain data ----------------------------------------------------------------
@@ -310,7 +321,7 @@ def _surface(entries: object, index: int, names: set[str], controls: _Controls,
     _check(not caps or (kind == "circles" and not closed))
     interpolation = _choice(entries, "interpolation", "blade", careful.INTERPOLATIONS)
     _check(interpolation == "blade" or kind == "circles")
-    first = len(controls.items)
+    first = len(controls.forms)
     key_path = f"surfaces[{index}]"
     controls.add(get("controls"), kind, curve, closed, key_path)
     around, along, tolerance = _resolution(entries, kind)
@@ -328,7 +339,7 @@ def _surface(entries: object, index: int, names: set[str], controls: _Controls,
               "along": along, "tolerance": tolerance, "caps": caps, "material": material,
               "location": _frozen(Location, {"file": path, "line": line, "key_path": key_path}),
               "uv": uv, "uv_scale": uv_scale, "interpolation": interpolation}
-    return fields, first, len(controls.items)
+    return fields, first, len(controls.forms)
 
 
 def _kb_parameter(entries: dict, key: str, curve: str) -> float:
@@ -371,44 +382,51 @@ def _material(entries: object) -> Material:
 
 
 class _Controls:
-    """Every control of the file, gathered so that their numbers are checked as arrays."""
+    """Every control of the file, gathered so that their numbers are checked as arrays and
+    their specs built by C-level maps."""
 
     def __init__(self, path: str) -> None:
         self.path = path
-        self.items: list[tuple] = []  # (form, line, key path, weight, index into its arrays)
+        self.lines: list[int] = []
+        self.key_paths: list[str] = []
+        self.weights: list[float] = []
+        self.forms: list[int] = []  # _CIRCLE, _PAIR or _THROUGH, in file order
         self.centers: list = []
         self.normals: list = []
         self.radii: list = []
         self.ends_a: list = []
         self.ends_b: list = []
+        self.throughs: list = []
 
     def add(self, items: object, kind: str, curve: str, closed: bool, key_path: str) -> None:
         _check(type(items) is list and len(items) >= (3 if closed else 2))
         circles = kind == "circles"
-        allowed = _CIRCLE_KEYS if circles else _POINT_PAIR_KEYS
+        allowed = _CIRCLE_KEYS_LINE if circles else _POINT_PAIR_KEYS_LINE
         rational = curve == "rational_bezier"
         weights = []
-        append = self.items.append
         for i, entries in enumerate(items):
-            _check(type(entries) is dict)
-            line = entries.pop("", None)
-            _check(line is not None and allowed.issuperset(entries))
+            _check(type(entries) is dict and allowed.issuperset(entries))
+            line = entries.get("")
+            _check(line is not None)
+            self.lines.append(line)
+            self.key_paths.append(f"{key_path}.controls[{i}]")
             weight = 1.0
             if "weight" in entries:
                 _check(rational)
                 weight = _number(entries["weight"])
                 _check(weight > 0.0)
                 weights.append(weight)
-            where = f"{key_path}.controls[{i}]"
+            self.weights.append(weight)
             if not circles:
-                append(("pair", line, where, weight, len(self.ends_a)))
+                self.forms.append(_PAIR)
                 self.ends_a.append(entries.get("a"))
                 self.ends_b.append(entries.get("b"))
             elif "through" in entries:
                 _check(entries.keys().isdisjoint(("center", "normal", "radius")))
-                append(("through", line, where, weight, _through(entries["through"])))
+                self.forms.append(_THROUGH)
+                self.throughs.append(_through(entries["through"]))
             else:
-                append(("circle", line, where, weight, len(self.centers)))
+                self.forms.append(_CIRCLE)
                 self.centers.append(entries.get("center"))
                 self.normals.append(entries.get("normal"))
                 self.radii.append(entries.get("radius"))
@@ -419,6 +437,7 @@ class _Controls:
             _check(all(weight * careful.MAX_WEIGHT_RATIO >= largest for weight in weights))
 
     def build(self) -> list[CircleControl | PointPairControl]:
+        """The specs, in file order, once every number has passed."""
         centers = _lengths(self.centers, (len(self.centers), 3))
         normals = _numbers(self.normals, (len(self.normals), 3))
         _check(bool(np.all(np.any(normals != 0.0, axis=1))))
@@ -428,32 +447,48 @@ class _Controls:
         ends_b = _lengths(self.ends_b, (len(self.ends_b), 3))
         for i in np.flatnonzero(_maybe_coincident(ends_a, ends_b)):
             _check(not careful._coincident(tuple(ends_a[i].tolist()), tuple(ends_b[i].tolist())))
-        centers, normals = list(map(tuple, centers.tolist())), list(map(tuple, normals.tolist()))
-        ends_a, ends_b = list(map(tuple, ends_a.tolist())), list(map(tuple, ends_b.tolist()))
-        radii = radii.tolist()
-        path = self.path
-        built = []
-        append = built.append
-        new, assign = _new, _set
-        for form, line, where, weight, index in self.items:
-            location = new(Location)
-            assign(location, "__dict__", {"file": path, "line": line, "key_path": where})
-            if form == "circle":
-                control = new(CircleControl)
-                assign(control, "__dict__", {
-                    "center": centers[index], "normal": normals[index], "radius": radii[index],
-                    "through": None, "weight": weight, "location": location})
-            elif form == "pair":
-                control = new(PointPairControl)
-                assign(control, "__dict__", {"a": ends_a[index], "b": ends_b[index],
-                                             "weight": weight, "location": location})
-            else:
-                control = new(CircleControl)
-                assign(control, "__dict__", {
-                    "center": None, "normal": None, "radius": None, "through": index,
-                    "weight": weight, "location": location})
-            append(control)
+        count = len(self.forms)
+        locations = _instances(Location, ("file", "line", "key_path"),
+                               zip(repeat(self.path, count), self.lines, self.key_paths))
+        forms = np.array(self.forms, dtype=np.int8)
+        parts = {}
+        for form, cls, keys, columns in (
+                (_CIRCLE, CircleControl, _CIRCLE_FIELDS,
+                 lambda n: (map(tuple, centers.tolist()), map(tuple, normals.tolist()),
+                            radii.tolist(), repeat(None, n))),
+                (_PAIR, PointPairControl, _PAIR_FIELDS,
+                 lambda n: (map(tuple, ends_a.tolist()), map(tuple, ends_b.tolist()))),
+                (_THROUGH, CircleControl, _CIRCLE_FIELDS,
+                 lambda n: (repeat(None, n), repeat(None, n), repeat(None, n), self.throughs))):
+            where = np.flatnonzero(forms == form).tolist()
+            if where:
+                weights = [self.weights[i] for i in where]
+                mine = [locations[i] for i in where]
+                parts[form] = (where, _instances(cls, keys, zip(*columns(len(where)), weights, mine)))
+        if len(parts) == 1:
+            return next(iter(parts.values()))[1]
+        built = [None] * count
+        for where, instances in parts.values():
+            for i, instance in zip(where, instances):
+                built[i] = instance
         return built
+
+
+_CIRCLE, _PAIR, _THROUGH = 0, 1, 2
+_CIRCLE_FIELDS = ("center", "normal", "radius", "through", "weight", "location")
+_PAIR_FIELDS = ("a", "b", "weight", "location")
+_CIRCLE_KEYS_LINE = _CIRCLE_KEYS | {""}
+_POINT_PAIR_KEYS_LINE = _POINT_PAIR_KEYS | {""}
+
+
+def _instances(cls: type, keys: tuple[str, ...], rows) -> list:
+    """Frozen dataclass instances of ``cls`` from rows of field values in ``keys`` order, as
+    ``_frozen`` builds them, by maps over builtins (no Python-level loop)."""
+    rows = list(rows)
+    instances = list(map(_new, repeat(cls, len(rows))))
+    fields = map(dict, map(zip, repeat(keys), rows))
+    deque(map(_set, instances, repeat("__dict__"), fields), maxlen=0)
+    return instances
 
 
 def _numbers(values: list, shape: tuple[int, ...]) -> np.ndarray:
