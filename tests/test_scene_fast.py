@@ -242,3 +242,24 @@ def test_the_reader_benchmark_runs_at_a_small_size_and_both_readers_agree():
                             capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr
     assert result.stdout.count("  fast path ") == 2 and "DIFFER" not in result.stderr
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.stem)
+def test_examples_as_pyyaml_writes_them_read_the_same(path):
+    """PyYAML's block layout (a number per line, indentless lists) and its flow-leaf layout."""
+    import yaml
+
+    document = parse_scene(path.read_text(encoding="utf-8"), str(path), fast=False)
+    assert document  # the example itself is valid
+    tree = yaml.safe_load(path.read_text(encoding="utf-8"))
+    for flow in (False, None):
+        text = yaml.safe_dump(tree, sort_keys=False, default_flow_style=flow)
+        assert_same(text, rendering=False)
+        assert_same(text, rendering=True)
+        if not isinstance(outcome(text, False, rendering=False), tuple):
+            assert read_fast(text, "scene.yaml", False) == parse_scene(text, "scene.yaml", False, fast=False)
+
+
+def test_a_long_line_outside_the_subset_is_refused_in_linear_time():
+    text = "cgamesh: 1\nsurfaces: a" + " " * 200_000 + "b\n"
+    assert read_fast(text, "scene.yaml", False) is None

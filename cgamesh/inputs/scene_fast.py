@@ -58,7 +58,7 @@ _NESTED_LIST = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*+\]"
 _FLOW = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*+\]|\{{(?:{_FLOW_ATOM}|{_NESTED_LIST})*+\}}"
 # indent, '- ', key, then a flow value, a number, a name, or anything else (outside the subset).
 _LINE = re.compile(rf'^( *)(- +)?(?:({_IDENTIFIER}):(?: +|$))?'
-                   rf'(?:({_FLOW})|({_NUMBER})|({_IDENTIFIER})|(.+?))? *$', re.M)
+                   rf'(?:({_FLOW})|({_NUMBER})|({_IDENTIFIER})|([^\n]+))? *$', re.M)
 # YAML 1.2 core-schema words (the careful reader's resolution) as JSON literals.
 _WORDS = {word: literal for literal, words in (("true", ("true", "True", "TRUE")),
                                                ("false", ("false", "False", "FALSE")),
