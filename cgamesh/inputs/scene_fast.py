@@ -331,15 +331,18 @@ def _surface(entries: object, index: int, names: set[str], controls: _Controls,
     if "uv_scale" in entries:
         uv_scale = _number(entries["uv_scale"])
         _check(uv == "natural" and uv_scale > 0.0)
+    tension = bias = continuity = 0.0
+    if curve == "kb" or not entries.keys().isdisjoint(_KB_KEYS):
+        tension, bias, continuity = (_kb_parameter(entries, key, curve) for key in _KB_KEYS)
     fields = {"name": name, "type": kind, "curve": curve,
-              "tension": _kb_parameter(entries, "tension", curve),
-              "bias": _kb_parameter(entries, "bias", curve),
-              "continuity": _kb_parameter(entries, "continuity", curve),
-              "closed": closed, "align": align, "controls": None, "around": around,
+              "tension": tension, "bias": bias, "continuity": continuity, "closed": closed, "align": align, "controls": None, "around": around,
               "along": along, "tolerance": tolerance, "caps": caps, "material": material,
               "location": _frozen(Location, {"file": path, "line": line, "key_path": key_path}),
               "uv": uv, "uv_scale": uv_scale, "interpolation": interpolation}
     return fields, first, len(controls.forms)
+
+
+_KB_KEYS = ("tension", "bias", "continuity")
 
 
 def _kb_parameter(entries: dict, key: str, curve: str) -> float:
