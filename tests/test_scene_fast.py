@@ -123,6 +123,14 @@ EDGES = [
     GOOD.replace("      - {center: [0, 0, 0], normal: [0, 0, 1], radius: 1}", "      - [0]", 1),
     GOOD.replace("      - {center: [0, 0, 0], normal: [0, 0, 1], radius: 1}", "      -", 1),
     GOOD + "    bad key: 1\n",
+    GOOD.replace("{center: [0, 0, 0], normal: [0, 0, 1], radius: 1}",
+                 "center:\n        - true\n        - 0\n        - 0\n        normal: [0, 0, 1]\n        radius: 1", 1),
+    GOOD.replace("{center: [0, 0, 0], normal: [0, 0, 1], radius: 1}",
+                 "center:\n        - 1\n        - null\n        - 0\n        normal: [0, 0, 1]\n        radius: 1", 1),
+    GOOD.replace("{center: [0, 0, 0], normal: [0, 0, 1], radius: 1}",
+                 "center:\n        - 1\n        - x\n        - 0\n        normal: [0, 0, 1]\n        radius: 1", 1),
+    GOOD.replace("{center: [0, 0, 0], normal: [0, 0, 1], radius: 1}",
+                 "center:\n        - 1\n        - 2\n        - 0\n        normal: [0, 0, 1]\n        radius: 1", 1),
 ]
 
 

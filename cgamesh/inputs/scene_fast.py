@@ -190,10 +190,12 @@ def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
                     append(f'{{"":{number},{flow[1:]}' if flow[0] == "{" else flow)
                 elif numeral:
                     append(numeral)
-                elif name:
-                    append(_WORDS.get(name) or f'"{name}"')
+                elif name and name not in _WORDS:
+                    append(f'"{name}"')
                 else:
-                    raise _OutsideSubset(number)  # '-' alone: rare, left to the careful path
+                    # '-' alone, or a boolean or null as a list item: never valid in a scene,
+                    # and numpy would read true as 1.0 in a list of numbers.
+                    raise _OutsideSubset(number)
                 continue
             outer.append((mapping, column_open, True))
             mapping, column_open = True, column + len(dash)
