@@ -49,6 +49,10 @@ def test_every_example_reads_the_same_and_meshing_takes_the_fast_path(path, rend
 
 
 def _fuzz_cases(count: int = 300, seed: int = 13):
+    """Mutated examples (as the CLI fuzz test makes them: flow lists of numbers), each also in
+    PyYAML's block layout (a list item per line), where it still loads."""
+    import yaml
+
     rng = random.Random(seed)
     texts = [path.read_text(encoding="utf-8") for path in EXAMPLES]
     for number in range(count):
@@ -56,6 +60,10 @@ def _fuzz_cases(count: int = 300, seed: int = 13):
         for _ in range(rng.choice([1, 1, 2, 3])):
             text = mutate(text, rng)
         yield text
+        try:
+            yield yaml.safe_dump(yaml.safe_load(text), sort_keys=False, default_flow_style=False)
+        except (yaml.YAMLError, RecursionError):
+            pass
 
 
 @pytest.mark.parametrize("text", list(_fuzz_cases()))
