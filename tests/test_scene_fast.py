@@ -131,6 +131,11 @@ EDGES = [
     GOOD.replace("      - {center: [0, 0, 0], normal: [0, 0, 1], radius: 1}", "      - [0]", 1),
     GOOD.replace("      - {center: [0, 0, 0], normal: [0, 0, 1], radius: 1}", "      -", 1),
     GOOD + "    bad key: 1\n",
+    "      # a comment with a control character \x01\n" + GOOD,
+    "      # a comment with a Unicode line break \u2028 inside\n" + GOOD,
+    "      # a comment with NEL \x85 inside\n" + GOOD,
+    "      # a comment in UTF-8: é\n" + GOOD,
+    "\t# a tab\n" + GOOD,
     GOOD.replace("{center: [0, 0, 0], normal: [0, 0, 1], radius: 1}",
                  "center:\n        - true\n        - 0\n        - 0\n        normal: [0, 0, 1]\n        radius: 1", 1),
     GOOD.replace("{center: [0, 0, 0], normal: [0, 0, 1], radius: 1}",
@@ -279,3 +284,64 @@ def test_examples_as_pyyaml_writes_them_read_the_same(path):
 def test_a_long_line_outside_the_subset_is_refused_in_linear_time():
     text = "cgamesh: 1\nsurfaces: a" + " " * 200_000 + "b\n"
     assert read_fast(text, "scene.yaml", False) is None
+
+
+# --- the subset's parser alone, against PyYAML's node tree ---------------------------------------
+
+def _careful_plain(text: str):
+    """The document as the careful reader composes it, as plain data with the fast path's
+    conventions (a list item's mapping holds its line under ""); None if PyYAML refuses it or
+    a mapping repeats a key (the fast path must then step aside)."""
+    import yaml
+
+    from cgamesh.inputs.scene import _core_value, _CoreLoader
+
+    def plain(node, item=False):
+        if isinstance(node, yaml.MappingNode):
+            out = {"": node.start_mark.line + 1} if item else {}
+            for key_node, value_node in node.value:
+                key = plain(key_node)
+                if not isinstance(key, str) or key in out:
+                    raise KeyError(key)
+                out[key] = plain(value_node)
+            return out
+        if isinstance(node, yaml.SequenceNode):
+            return [plain(value, True) for value in node.value]
+        return _core_value(node)
+
+    try:
+        return plain(yaml.compose(text, Loader=_CoreLoader))
+    except (yaml.YAMLError, KeyError, ValueError, TypeError, RecursionError):
+        return None
+
+
+SCALARS = ["0", "-0", "1", "12", "-3.5", "1e5", "1E-5", "2.5e+3", "1.", ".5", "+1", "01", "0x1F",
+           "1_000", "true", "True", "TRUE", "false", "null", "Null", "~", "yes", "on", "x", "e5",
+           "s_1", "a b", "a: b", "a:b", "NaN", ".inf", "-.inf", ".nan", "1e400", "-", "--", "?"]
+FLOWS = ["[1, 2, 3]", "[1,2,3]", "[ 1, 2 ]", "[1, 2,]", "[]", "[1], [2]", "[[1, 2], [3, 4]]",
+         "{a: 1, b: [1, 2]}", "{a: 1, a: 2}", "{a:1}", "{a: 1,b: 2}", "{ a: 1}", "{}", "{a: {b: 1}}",
+         "{a: [[1, 2, 3], [4, 5, 6]]}", "[true, 1]", "[1, x]", "{a: 1} x", "[1, 2", "{a: 1, b: 2} # c"]
+line = st.tuples(st.sampled_from(["", "  ", "    ", "   ", "      "]),
+                 st.sampled_from(["", "", "- ", "-  "]),
+                 st.sampled_from(["", "a", "b", "c", "center"]),
+                 st.sampled_from(["", ""] + SCALARS + FLOWS),
+                 st.sampled_from(["", "", " # note", "  ", "#x"]))
+
+
+def _text(lines) -> str:
+    out = []
+    for indent, dash, key, value, tail in lines:
+        body = f"{key}:{' ' + value if value else ''}" if key else value
+        out.append(f"{indent}{dash}{body}{tail}")
+    return "\n".join(out) + "\n"
+
+
+@settings(max_examples=600)
+@given(st.lists(line, min_size=1, max_size=12))
+def test_the_subset_parser_reads_what_pyyaml_reads_or_steps_aside(lines):
+    from cgamesh.inputs.scene_fast import _plain_document
+
+    text = _text([("", "", "a", "", "")] + lines)  # a mapping at the top, like a scene
+    fast = _plain_document(text)
+    if fast is not None:
+        assert repr(fast) == repr(_careful_plain(text)), text
