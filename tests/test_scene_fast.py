@@ -66,7 +66,7 @@ def _fuzz_cases(count: int = 300, seed: int = 13):
             pass
 
 
-@pytest.mark.parametrize("text", list(_fuzz_cases()))
+@pytest.mark.parametrize("text", [pytest.param(text, id=str(i)) for i, text in enumerate(_fuzz_cases())])
 def test_mutated_examples_give_the_same_scene_or_the_same_located_error(text):
     assert_same(text, rendering=False)
     assert_same(text, rendering=True)
@@ -163,13 +163,13 @@ WHOLE = [
 ]
 
 
-@pytest.mark.parametrize("tail", EDGES)
+@pytest.mark.parametrize("tail", [pytest.param(tail, id=str(i)) for i, tail in enumerate(EDGES)])
 def test_subset_edges_give_what_the_careful_reader_gives(tail):
     assert_same(HEAD + tail)
     assert_same(HEAD + tail, rendering=False)
 
 
-@pytest.mark.parametrize("text", WHOLE)
+@pytest.mark.parametrize("text", [pytest.param(text, id=str(i)) for i, text in enumerate(WHOLE)])
 def test_rule_edges_give_what_the_careful_reader_gives(text):
     assert_same(text)
 
