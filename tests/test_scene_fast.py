@@ -289,28 +289,33 @@ def test_a_long_line_outside_the_subset_is_refused_in_linear_time():
 # --- the subset's parser alone, against PyYAML's node tree ---------------------------------------
 
 def _careful_plain(text: str):
-    """The document as the careful reader composes it, as plain data with the fast path's
-    conventions (a list item's mapping holds its line under ""); None if PyYAML refuses it or
-    a mapping repeats a key (the fast path must then step aside)."""
+    """(the document as the careful reader composes it, as plain data with the fast path's
+    conventions, the number of keys written): a list item's mapping holds its line under "",
+    a repeated key keeps its first place and its last value (as JSON's reading does); None if
+    PyYAML refuses the text or a key is not a string."""
     import yaml
 
     from cgamesh.inputs.scene import _core_value, _CoreLoader
 
+    keys = 0
+
     def plain(node, item=False):
+        nonlocal keys
         if isinstance(node, yaml.MappingNode):
             out = {"": node.start_mark.line + 1} if item else {}
             for key_node, value_node in node.value:
                 key = plain(key_node)
-                if not isinstance(key, str) or key in out:
+                if not isinstance(key, str) or key == "":
                     raise KeyError(key)
                 out[key] = plain(value_node)
+                keys += 1
             return out
         if isinstance(node, yaml.SequenceNode):
             return [plain(value, True) for value in node.value]
         return _core_value(node)
 
     try:
-        return plain(yaml.compose(text, Loader=_CoreLoader))
+        return plain(yaml.compose(text, Loader=_CoreLoader)), keys
     except (yaml.YAMLError, KeyError, ValueError, TypeError, RecursionError):
         return None
 
@@ -342,6 +347,6 @@ def test_the_subset_parser_reads_what_pyyaml_reads_or_steps_aside(lines):
     from cgamesh.inputs.scene_fast import _plain_document
 
     text = _text([("", "", "a", "", "")] + lines)  # a mapping at the top, like a scene
-    fast = _plain_document(text)
+    fast = _plain_document(text)  # (document, keys written): a repeated key shows in the count
     if fast is not None:
         assert repr(fast) == repr(_careful_plain(text)), text

@@ -79,10 +79,10 @@ def read_fast(text: str, path: str, rendering: bool) -> Scene | None:
     collecting = gc.isenabled()
     gc.disable()
     try:
-        document = _plain_document(text)
-        if document is None:
+        plain = _plain_document(text)
+        if plain is None:
             return None
-        return _scene(document, path, rendering)
+        return _scene(*plain, path, rendering)
     except _OutsideSubset:
         return None
     finally:
@@ -92,27 +92,25 @@ def read_fast(text: str, path: str, rendering: bool) -> Scene | None:
 
 # --- the YAML subset, as JSON ------------------------------------------------------------------
 
-def _unique_keys(pairs: list) -> dict:
-    mapping = dict(pairs)
-    if len(mapping) != len(pairs):
-        raise _OutsideSubset("a duplicate key")
-    return mapping
-
-
 def _no_constant(name: str):
     raise _OutsideSubset(name)  # NaN / Infinity: JSON's words, not YAML's
 
 
-def _plain_document(text: str) -> dict | None:
-    """The document as plain data, every mapping that is a list item holding its 1-based line
-    under the key ""; None outside the subset."""
+def _plain_document(text: str) -> tuple[dict, int] | None:
+    """(the document as plain data, every mapping that is a list item holding its 1-based line
+    under the key "", the number of keys written in it); None outside the subset. A repeated
+    key leaves the mapping with fewer keys than were written: the checks count every key they
+    see and step aside on a difference (cheaper than a hook on every mapping)."""
     text = _keys_quoted(text)
     if text is None:
         return None
     try:
         pieces = _json_pieces(_LINE.findall(text))
-        return json.loads("".join(pieces), object_pairs_hook=_unique_keys,
-                          parse_constant=_no_constant)
+        document = "".join(pieces)
+        # Every key ends in '":' (a block key as written here, a flow key once its ': ' is
+        # quoted); the line markers are '"":'.
+        keys = document.count('":') - document.count('"":')
+        return json.loads(document, parse_constant=_no_constant), keys
     except (_OutsideSubset, ValueError, RecursionError):
         return None
 
@@ -282,11 +280,16 @@ for _cls in (Location, CircleControl, PointPairControl, SurfaceSpec):
     assert not hasattr(_cls, "__post_init__")
 
 
-def _scene(document: dict, path: str, rendering: bool) -> Scene:
+def _scene(document: dict, keys: int, path: str, rendering: bool) -> Scene:
+    """The Scene of the plain ``document`` that was written with ``keys`` keys."""
     _check(type(document) is dict and _TOP_KEYS.issuperset(document))
-    if rendering:
-        # The rendering keys are few and small: the careful reader reads them.
-        _check(not any(key in document for key in RENDERING_KEYS))
+    seen = len(document)
+    for key in RENDERING_KEYS:
+        if key in document:
+            # The rendering keys are few and small: the careful reader reads them; meshing
+            # leaves them unread, but their keys are counted.
+            _check(not rendering)
+            seen += _count_keys(document[key])
     version = document.get("cgamesh")
     _check(type(version) is int and version in careful.SUPPORTED_VERSIONS)
     units = _choice(document, "units", "m", tuple(careful.METERS_PER_UNIT))
@@ -297,6 +300,7 @@ def _scene(document: dict, path: str, rendering: bool) -> Scene:
     controls = _Controls(path)
     parts = [_surface(item, i, names, controls, path) for i, item in enumerate(items)]
     built = tuple(controls.build())
+    _check(seen + controls.keys_seen == keys)  # else a key was repeated
     surfaces = []
     for fields, first, last in parts:
         fields["controls"] = built[first:last]
@@ -311,6 +315,7 @@ def _surface(entries: object, index: int, names: set[str], controls: _Controls,
     _check(type(entries) is dict)
     line = entries.pop("", None)
     _check(line is not None and _SURFACE_KEYS.issuperset(entries))
+    controls.keys_seen += len(entries)
     get = entries.get
     name, kind, curve = get("name"), get("type"), get("curve")
     _check(type(name) is str and _NAME.fullmatch(name) is not None and name not in names
@@ -326,8 +331,8 @@ def _surface(entries: object, index: int, names: set[str], controls: _Controls,
     first = len(controls.forms)
     key_path = f"surfaces[{index}]"
     controls.add(get("controls"), kind, curve, closed, key_path)
-    around, along, tolerance = _resolution(entries, kind)
-    material = _material(get("material", _DEFAULT_MATERIAL))
+    around, along, tolerance = _resolution(entries, kind, controls)
+    material = _material(get("material", _DEFAULT_MATERIAL), controls)
     uv = _choice(entries, "uv", "natural", careful.UV_MODES)
     uv_scale = None
     if "uv_scale" in entries:
@@ -354,7 +359,8 @@ def _kb_parameter(entries: dict, key: str, curve: str) -> float:
     return _in(entries[key], -1.0, 1.0)
 
 
-def _resolution(entries: dict, kind: str) -> tuple[int | None, int | None, float | None]:
+def _resolution(entries: dict, kind: str,
+                seen: _Controls) -> tuple[int | None, int | None, float | None]:
     if "tolerance" in entries:
         _check("resolution" not in entries)
         tolerance = _number(entries["tolerance"])
@@ -364,6 +370,7 @@ def _resolution(entries: dict, kind: str) -> tuple[int | None, int | None, float
         return careful.DEFAULT_AROUND, careful.DEFAULT_ALONG, None
     resolution = entries["resolution"]
     _check(type(resolution) is dict and _RESOLUTION_KEYS.issuperset(resolution))
+    seen.keys_seen += len(resolution)
     around = resolution.get("around", careful.DEFAULT_AROUND)
     along = resolution.get("along", careful.DEFAULT_ALONG)
     least_around = 3 if kind == "circles" else 2
@@ -372,10 +379,11 @@ def _resolution(entries: dict, kind: str) -> tuple[int | None, int | None, float
     return around, along, None
 
 
-def _material(entries: object) -> Material:
+def _material(entries: object, seen: _Controls) -> Material:
     if entries is _DEFAULT_MATERIAL:
         return entries
     _check(type(entries) is dict and _MATERIAL_KEYS.issuperset(entries))
+    seen.keys_seen += len(entries)
     color = _DEFAULT_MATERIAL.color
     if "color" in entries:
         values = entries["color"]
@@ -392,6 +400,7 @@ class _Controls:
 
     def __init__(self, path: str) -> None:
         self.path = path
+        self.keys_seen = 0  # keys of every mapping checked, surfaces' and their parts' too
         self.lines: list[int] = []
         self.key_paths: list[str] = []
         self.weights: list[float] = []
@@ -413,6 +422,7 @@ class _Controls:
             _check(type(entries) is dict and allowed.issuperset(entries))
             line = entries.get("")
             _check(line is not None)
+            self.keys_seen += len(entries) - 1
             self.lines.append(line)
             self.key_paths.append(f"{key_path}.controls[{i}]")
             weight = 1.0
@@ -494,6 +504,15 @@ def _instances(cls: type, keys: tuple[str, ...], rows) -> list:
     fields = map(dict, map(zip, repeat(keys), rows))
     deque(map(_set, instances, repeat("__dict__"), fields), maxlen=0)
     return instances
+
+
+def _count_keys(value: object) -> int:
+    """Keys of every mapping in ``value`` (list items' line markers left out)."""
+    if type(value) is dict:
+        return sum(_count_keys(v) for v in value.values()) + len(value) - ("" in value)
+    if type(value) is list:
+        return sum(_count_keys(v) for v in value)
+    return 0
 
 
 def _numbers(values: list, shape: tuple[int, ...]) -> np.ndarray:
