@@ -342,8 +342,8 @@ def _surface(entries: object, index: int, names: set[str], controls: _Controls,
     if curve == "kb" or not entries.keys().isdisjoint(_KB_KEYS):
         tension, bias, continuity = (_kb_parameter(entries, key, curve) for key in _KB_KEYS)
     fields = {"name": name, "type": kind, "curve": curve,
-              "tension": tension, "bias": bias, "continuity": continuity, "closed": closed, "align": align, "controls": None, "around": around,
-              "along": along, "tolerance": tolerance, "caps": caps, "material": material,
+              "tension": tension, "bias": bias, "continuity": continuity, "closed": closed,
+              "align": align, "controls": None, "around": around, "along": along, "tolerance": tolerance, "caps": caps, "material": material,
               "location": _frozen(Location, {"file": path, "line": line, "key_path": key_path}),
               "uv": uv, "uv_scale": uv_scale, "interpolation": interpolation}
     return fields, first, len(controls.forms)
