@@ -154,11 +154,12 @@ class Scene:
     attenuation: Attenuation = Attenuation()
 
 
-def load_scene(path: str | os.PathLike, rendering: bool = True) -> Scene:
+def load_scene(path: str | os.PathLike, rendering: bool = True, fast: bool = True) -> Scene:
     """Read and validate the scene file at ``path`` (UTF-8, an optional BOM allowed).
 
     ``rendering``: also read the rendering keys (camera, lights, objects, ...); meshing leaves
-    them unread, so a mistake there stops only the commands that render.
+    them unread, so a mistake there stops only the commands that render. ``fast``: try the
+    fast path first (see ``parse_scene``).
     """
     file = os.fsdecode(path)
     try:
@@ -172,12 +173,23 @@ def load_scene(path: str | os.PathLike, rendering: bool = True) -> Scene:
         raise SceneFileError(
             f"{file}:{line}: the scene file must be UTF-8 text, got byte 0x{exc.object[exc.start]:02x} "
             f"in column {column}") from exc
-    return parse_scene(text, file, rendering)
+    return parse_scene(text, file, rendering, fast)
 
 
-def parse_scene(text: str, path: str = "<string>", rendering: bool = True) -> Scene:
+def parse_scene(text: str, path: str = "<string>", rendering: bool = True,
+                fast: bool = True) -> Scene:
     """Validate scene-file ``text``; ``path`` only names the file in error messages;
-    ``rendering`` as for ``load_scene``."""
+    ``rendering`` as for ``load_scene``.
+
+    ``fast``: first try the fast path (cgamesh.inputs.scene_fast), which returns the same
+    Scene for the common shape of scene files or steps aside; this careful reader, which keeps
+    every node's line, then decides and names the line of any mistake. False: the careful
+    reader alone (the reference the fast path is tested against)."""
+    if fast:
+        from cgamesh.inputs.scene_fast import read_fast  # it imports this module
+        scene = read_fast(text, path, rendering)
+        if scene is not None:
+            return scene
     root = _compose(text, path)
     r = _Reader(path)
     if root is None:

@@ -1,0 +1,570 @@
+"""The fast path of the scene reader: plain data at C speed, checked over arrays.
+
+The careful reader (``cgamesh.inputs.scene``) walks PyYAML's node tree to name the line of
+every mistake; that costs about 10 us per node, so a scene of thousands of surfaces reads at
+well under 1 MB/s, with libyaml's C parser too (its nodes and marks are Python objects). Yet
+lines are needed only when something is wrong, plus the line of each surface and control
+(their ``Location``). So reading is two passes:
+
+1. This module accepts a strict subset of YAML, the shape that scene files are written in
+   (block mappings and lists of identifier keys; plain numbers, names and booleans; one-line
+   flow lists and mappings of numbers), rewrites it line by line into JSON with the line of
+   every list item's mapping under the key "" and lets ``json.loads`` build it; then checks
+   every value, numbers as arrays over all controls of the file at once.
+2. Anything it cannot vouch for returns ``None`` (never an error): text outside the subset
+   (quotes, anchors, aliases, tags, block scalars, tabs, multi-line flow, non-ASCII, ...), a
+   duplicate key, or any value the careful reader would refuse. ``parse_scene`` then runs
+   the careful reader, which gives the located one-line error (or, for valid YAML outside the
+   subset, the scene).
+
+So the fast path never decides what an error says: it either returns exactly the ``Scene``
+the careful reader returns (the tests compare both on every example and on generated scenes)
+or steps aside. Its security follows from the subset: no tag, anchor or alias can be
+written in it, so nothing is constructed beyond str, int, float, bool, None, list and dict,
+and nothing expands.
+"""
+
+from __future__ import annotations
+
+import gc
+import json
+import re
+from collections import deque
+from itertools import repeat
+
+import numpy as np
+
+from cgamesh.material import Material
+from cgamesh.inputs import scene as careful
+from cgamesh.inputs.scene import CircleControl, Location, PointPairControl, Scene, SurfaceSpec
+from cgamesh.inputs.scene_rendering import RENDERING_KEYS
+
+# A comment starts at '#' at the start of a line or after a space (in the subset no quoted
+# text can hold one).
+_COMMENT = re.compile(r"(?<![^ \n])#[^\n]*")
+# The keys of flow mappings after the first: ', ' then an identifier (a number in a list
+# starts with a digit or '-'). Every key ends in ': ' or ':' at the line end.
+_NEXT_KEY = re.compile(r", (?=[A-Za-z_])")
+_INNER_COLON = re.compile(r":(?![ \n])")
+
+_NUMBER = r"-?(?:0|[1-9][0-9]*)(?:\.[0-9]+)?(?:[eE][-+]?[0-9]+)?"
+_IDENTIFIER = r"[A-Za-z_][A-Za-z0-9_]*"
+# One-line flow collections, nested at most three deep (a mapping of lists of lists, as
+# `through` needs), holding only numbers and (quoted) keys: the whole value must be one
+# collection, so that '[1], [2]' is not read as two. Possessive: no backtracking.
+_FLOW_ATOM = r'(?:[-+0-9.eE, ]++|"[A-Za-z_][A-Za-z0-9_]*: )'
+_FLAT_LIST = rf"\[{_FLOW_ATOM}*+\]"
+_NESTED_LIST = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*+\]"
+_FLOW = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*+\]|\{{(?:{_FLOW_ATOM}|{_NESTED_LIST})*+\}}"
+# indent, '- ', key, then a flow value, a number, a name, or anything else (outside the subset).
+_LINE = re.compile(rf'^( *)(- +)?(?:({_IDENTIFIER}):(?: +|$))?'
+                   rf'(?:({_FLOW})|({_NUMBER})|({_IDENTIFIER})|([^\n]+))? *$', re.M)
+# YAML 1.2 core-schema words (the careful reader's resolution) as JSON literals.
+_WORDS = {word: literal for literal, words in (("true", ("true", "True", "TRUE")),
+                                               ("false", ("false", "False", "FALSE")),
+                                               ("null", ("null", "Null", "NULL")))
+          for word in words}
+
+
+class _OutsideSubset(Exception):
+    """The text or a value is one the fast path does not vouch for."""
+
+
+def read_fast(text: str, path: str, rendering: bool) -> Scene | None:
+    """The scene of ``text`` as ``parse_scene`` would return it, or None when this path
+    cannot vouch for the text (the careful reader then decides)."""
+    # Reading allocates some hundred thousand small lists, dicts and tuples, none in a cycle
+    # (reference counting frees them all); the cyclic collector would walk them again and
+    # again as they pile up, a quarter of the time. It is paused meanwhile.
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        plain = _plain_document(text)
+        if plain is None:
+            return None
+        return _scene(*plain, path, rendering)
+    except _OutsideSubset:
+        return None
+    finally:
+        if collecting:
+            gc.enable()
+
+
+# --- the YAML subset, as JSON ------------------------------------------------------------------
+
+def _no_constant(name: str):
+    raise _OutsideSubset(name)  # NaN / Infinity: JSON's words, not YAML's
+
+
+def _plain_document(text: str) -> tuple[dict, int] | None:
+    """(the document as plain data, every mapping that is a list item holding its 1-based line
+    under the key "", the number of keys written in it); None outside the subset. A repeated
+    key leaves the mapping with fewer keys than were written: the checks count every key they
+    see and step aside on a difference (cheaper than a hook on every mapping)."""
+    text = _keys_quoted(text)
+    if text is None:
+        return None
+    try:
+        pieces = _json_pieces(_LINE.findall(text))
+        document = "".join(pieces)
+        # Every key ends in '":' (a block key as written here, a flow key once its ': ' is
+        # quoted); the line markers are '"":'.
+        keys = document.count('":') - document.count('"":')
+        return json.loads(document, parse_constant=_no_constant), keys
+    except (_OutsideSubset, ValueError, RecursionError):
+        return None
+
+
+def _keys_quoted(text: str) -> str | None:
+    """The text without comments, the quotes of its flow keys opened; None if it cannot be in
+    the subset."""
+    # Printable ASCII and line feeds only: no tab (YAML's indentation rules for it are
+    # subtle), no carriage return, no byte PyYAML refuses, no Unicode line break (NEL, U+2028)
+    # that would shift line numbers; no quote, as the keys are quoted here.
+    if not (text.isascii() and text.replace("\n", "").isprintable()) or '"' in text:
+        return None
+    if "#" in text:
+        text = _COMMENT.sub("", text)
+    # Open the quotes of the keys of flow mappings: a '"' before the first key and before the
+    # keys after ', '; each flow value's ': ' closes them (``_json_pieces``). In the subset
+    # ':' appears only after keys (PyYAML reads a ':' followed by anything else as part of a
+    # plain scalar), so a stray quote only makes the JSON invalid.
+    if not text.endswith("\n"):
+        text += "\n"
+    if _INNER_COLON.search(text):
+        return None  # a ':' inside a plain scalar
+    return _NEXT_KEY.sub(', "', text.replace("{", '{"'))
+
+
+def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
+    """JSON text of the block structure; each line is (indent, dash, key, flow, number, name,
+    other) as ``_LINE`` splits it. Raises _OutsideSubset for anything the subset leaves out.
+
+    The innermost open block collection is (``mapping``, ``column``, ``items``): a mapping's
+    column is that of its keys, a list's that of its dashes, ``items`` whether it has one yet
+    (for the commas); ``outer`` holds the enclosing ones. ``pending`` is the column of a
+    mapping whose last key had no value on its line (a nested block follows, or null)."""
+    out: list[str] = []
+    append = out.append
+    outer: list[tuple[bool, int, bool]] = []
+    mapping, column_open, items = True, -1, False  # column -1: the document is not open yet
+    pending = -1
+    number = 0
+    for indent, dash, key, flow, numeral, name, other in lines:
+        number += 1
+        if other:
+            raise _OutsideSubset(number)
+        if not (dash or key):
+            if flow or numeral or name:
+                raise _OutsideSubset(number)  # a value alone on its line: a continuation
+            continue  # blank or comment
+        column = len(indent)
+        if pending >= 0:
+            if column > pending or (dash and column == pending):
+                outer.append((mapping, column_open, True))
+                mapping, column_open, items = not dash, column, False
+                append("[" if dash else "{")
+            else:
+                append("null")
+            pending = -1
+        while column_open > column or (column_open == column and not mapping and not dash):
+            append("}" if mapping else "]")  # a list at a key's column ends there too
+            mapping, column_open, items = outer.pop()
+        if column_open < 0:
+            if out or dash or column:
+                raise _OutsideSubset(number)  # the document is not one block mapping
+            append("{")
+            mapping, column_open = True, 0
+        elif column_open != column or mapping == bool(dash):
+            raise _OutsideSubset(number)  # misplaced line
+        if items:
+            append(",")
+        items = True
+        if dash:
+            if not key:
+                if flow:
+                    flow = flow.replace(": ", '": ')
+                    # A flow mapping as a list item: its line goes in first.
+                    append(f'{{"":{number},{flow[1:]}' if flow[0] == "{" else flow)
+                elif numeral:
+                    append(numeral)
+                elif name and name not in _WORDS:
+                    append(f'"{name}"')
+                else:
+                    # '-' alone, or a boolean or null as a list item: never valid in a scene,
+                    # and numpy would read true as 1.0 in a list of numbers.
+                    raise _OutsideSubset(number)
+                continue
+            outer.append((mapping, column_open, True))
+            mapping, column_open = True, column + len(dash)
+            append(f'{{"":{number},"{key}":')
+        else:
+            append(f'"{key}":')
+        if flow:
+            append(flow.replace(": ", '": '))
+        elif numeral:
+            append(numeral)
+        elif name:
+            append(_WORDS.get(name) or f'"{name}"')
+        else:
+            pending = column_open
+    if column_open < 0:
+        raise _OutsideSubset("an empty document")
+    if pending >= 0:
+        append("null")
+    append("}" if mapping else "]")
+    out.extend("}" if frame[0] else "]" for frame in reversed(outer))
+    return out
+
+
+# --- checks over the plain data ----------------------------------------------------------------
+
+_TOP_KEYS = frozenset(careful._TOP_KEYS)
+_SURFACE_KEYS = frozenset(careful._SURFACE_KEYS)
+_CIRCLE_KEYS = frozenset(careful._CIRCLE_KEYS)
+_POINT_PAIR_KEYS = frozenset(careful._POINT_PAIR_KEYS)
+_RESOLUTION_KEYS = frozenset(("around", "along"))
+_MATERIAL_KEYS = frozenset(("color", "roughness", "metallic"))
+_NAME = re.compile(careful.NAME_PATTERN)
+_DEFAULT_MATERIAL = Material()
+
+
+def _check(condition: bool) -> None:
+    if not condition:
+        raise _OutsideSubset("a value the careful reader refuses or reads otherwise")
+
+
+def _number(value: object) -> float:
+    """A finite number, as the careful reader's ``number`` reads it."""
+    kind = type(value)
+    if kind is int:
+        try:
+            value = float(value)
+        except OverflowError:
+            raise _OutsideSubset("a huge integer") from None
+    else:
+        _check(kind is float)
+    _check(value - value == 0.0)  # finite
+    return value
+
+
+def _in(value: object, low: float, high: float) -> float:
+    value = _number(value)
+    _check(low <= value <= high)
+    return value
+
+
+def _choice(entries: dict, key: str, default: str, options: tuple[str, ...]) -> str:
+    value = entries.get(key, default)
+    _check(type(value) is str and value in options)
+    return value
+
+
+def _flag(entries: dict, key: str, default: bool) -> bool:
+    value = entries.get(key, default)
+    _check(type(value) is bool)
+    return value
+
+
+def _frozen(cls: type, fields: dict):
+    """``cls(**fields)`` for a frozen dataclass without __post_init__: its generated __init__
+    sets each field with object.__setattr__; one assignment of the instance dict does the same
+    for all fields at once, at half the cost (which counts over thousands of controls)."""
+    instance = _new(cls)
+    _set(instance, "__dict__", fields)
+    return instance
+
+
+_new, _set = object.__new__, object.__setattr__
+for _cls in (Location, CircleControl, PointPairControl, SurfaceSpec):
+    assert not hasattr(_cls, "__post_init__")
+
+
+def _scene(document: dict, keys: int, path: str, rendering: bool) -> Scene:
+    """The Scene of the plain ``document`` that was written with ``keys`` keys."""
+    _check(type(document) is dict and _TOP_KEYS.issuperset(document))
+    seen = len(document)
+    for key in RENDERING_KEYS:
+        if key in document:
+            # The rendering keys are few and small: the careful reader reads them; meshing
+            # leaves them unread, but their keys are counted.
+            _check(not rendering)
+            seen += _count_keys(document[key])
+    version = document.get("cgamesh")
+    _check(type(version) is int and version in careful.SUPPORTED_VERSIONS)
+    units = _choice(document, "units", "m", tuple(careful.METERS_PER_UNIT))
+    up = _choice(document, "up", "z", careful.UP_AXES)
+    items = document.get("surfaces")
+    _check(type(items) is list and len(items) > 0)
+    names: set[str] = set()
+    controls = _Controls(path)
+    parts = [_surface(item, i, names, controls, path) for i, item in enumerate(items)]
+    built = tuple(controls.build())
+    _check(seen + controls.keys_seen == keys)  # else a key was repeated
+    surfaces = []
+    for fields, first, last in parts:
+        fields["controls"] = built[first:last]
+        surfaces.append(_frozen(SurfaceSpec, fields))
+    return Scene(path, version, units, careful.METERS_PER_UNIT[units], up, tuple(surfaces))
+
+
+def _surface(entries: object, index: int, names: set[str], controls: _Controls,
+             path: str) -> tuple[dict, int, int]:
+    """A surface's fields but its controls (added to ``controls``), and the range of its
+    controls there."""
+    _check(type(entries) is dict)
+    line = entries.pop("", None)
+    _check(line is not None and _SURFACE_KEYS.issuperset(entries))
+    controls.keys_seen += len(entries)
+    get = entries.get
+    name, kind, curve = get("name"), get("type"), get("curve")
+    _check(type(name) is str and _NAME.fullmatch(name) is not None and name not in names
+           and kind in careful.SURFACE_TYPES and curve in careful.CURVES
+           and type(kind) is str and type(curve) is str)
+    names.add(name)
+    closed, align, caps = get("closed", False), get("align", True), get("caps", False)
+    _check(type(closed) is bool and type(align) is bool and type(caps) is bool)
+    _check(not closed or curve in careful.CLOSABLE_CURVES)
+    _check(not caps or (kind == "circles" and not closed))
+    interpolation = _choice(entries, "interpolation", "blade", careful.INTERPOLATIONS)
+    _check(interpolation == "blade" or kind == "circles")
+    first = len(controls.forms)
+    key_path = f"surfaces[{index}]"
+    controls.add(get("controls"), kind, curve, closed, key_path)
+    around, along, tolerance = _resolution(entries, kind, controls)
+    material = _material(get("material", _DEFAULT_MATERIAL), controls)
+    uv = _choice(entries, "uv", "natural", careful.UV_MODES)
+    uv_scale = None
+    if "uv_scale" in entries:
+        uv_scale = _number(entries["uv_scale"])
+        _check(uv == "natural" and uv_scale > 0.0)
+    tension = bias = continuity = 0.0
+    if curve == "kb" or not entries.keys().isdisjoint(_KB_KEYS):
+        tension, bias, continuity = (_kb_parameter(entries, key, curve) for key in _KB_KEYS)
+    fields = {"name": name, "type": kind, "curve": curve,
+              "tension": tension, "bias": bias, "continuity": continuity, "closed": closed,
+              "align": align, "controls": None, "around": around, "along": along, "tolerance": tolerance, "caps": caps, "material": material,
+              "location": _frozen(Location, {"file": path, "line": line, "key_path": key_path}),
+              "uv": uv, "uv_scale": uv_scale, "interpolation": interpolation}
+    return fields, first, len(controls.forms)
+
+
+_KB_KEYS = ("tension", "bias", "continuity")
+
+
+def _kb_parameter(entries: dict, key: str, curve: str) -> float:
+    if key not in entries:
+        return 0.0
+    _check(curve == "kb")
+    return _in(entries[key], -1.0, 1.0)
+
+
+def _resolution(entries: dict, kind: str,
+                seen: _Controls) -> tuple[int | None, int | None, float | None]:
+    if "tolerance" in entries:
+        _check("resolution" not in entries)
+        tolerance = _number(entries["tolerance"])
+        _check(tolerance > 0.0)
+        return None, None, tolerance
+    if "resolution" not in entries:
+        return careful.DEFAULT_AROUND, careful.DEFAULT_ALONG, None
+    resolution = entries["resolution"]
+    _check(type(resolution) is dict and _RESOLUTION_KEYS.issuperset(resolution))
+    seen.keys_seen += len(resolution)
+    around = resolution.get("around", careful.DEFAULT_AROUND)
+    along = resolution.get("along", careful.DEFAULT_ALONG)
+    least_around = 3 if kind == "circles" else 2
+    _check(type(around) is int and least_around <= around <= careful.MAX_RESOLUTION)
+    _check(type(along) is int and 2 <= along <= careful.MAX_RESOLUTION)
+    return around, along, None
+
+
+def _material(entries: object, seen: _Controls) -> Material:
+    if entries is _DEFAULT_MATERIAL:
+        return entries
+    _check(type(entries) is dict and _MATERIAL_KEYS.issuperset(entries))
+    seen.keys_seen += len(entries)
+    color = _DEFAULT_MATERIAL.color
+    if "color" in entries:
+        values = entries["color"]
+        _check(type(values) is list and len(values) == 3)
+        color = tuple(_in(value, 0.0, 1.0) for value in values)
+    roughness = _in(entries.get("roughness", _DEFAULT_MATERIAL.roughness), 0.0, 1.0)
+    metallic = _in(entries.get("metallic", _DEFAULT_MATERIAL.metallic), 0.0, 1.0)
+    return Material(color, roughness, metallic)
+
+
+class _Controls:
+    """Every control of the file, gathered so that their numbers are checked as arrays and
+    their specs built by C-level maps."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+        self.keys_seen = 0  # keys of every mapping checked, surfaces' and their parts' too
+        self.lines: list[int] = []
+        self.key_paths: list[str] = []
+        self.weights: list[float] = []
+        self.forms: list[int] = []  # _CIRCLE, _PAIR or _THROUGH, in file order
+        self.centers: list = []
+        self.normals: list = []
+        self.radii: list = []
+        self.ends_a: list = []
+        self.ends_b: list = []
+        self.throughs: list = []
+
+    def add(self, items: object, kind: str, curve: str, closed: bool, key_path: str) -> None:
+        _check(type(items) is list and len(items) >= (3 if closed else 2))
+        circles = kind == "circles"
+        allowed = _CIRCLE_KEYS_LINE if circles else _POINT_PAIR_KEYS_LINE
+        rational = curve == "rational_bezier"
+        weights = []
+        for i, entries in enumerate(items):
+            _check(type(entries) is dict and allowed.issuperset(entries))
+            line = entries.get("")
+            _check(line is not None)
+            self.keys_seen += len(entries) - 1
+            self.lines.append(line)
+            self.key_paths.append(f"{key_path}.controls[{i}]")
+            weight = 1.0
+            if "weight" in entries:
+                _check(rational)
+                weight = _number(entries["weight"])
+                _check(weight > 0.0)
+                weights.append(weight)
+            self.weights.append(weight)
+            if not circles:
+                self.forms.append(_PAIR)
+                self.ends_a.append(entries.get("a"))
+                self.ends_b.append(entries.get("b"))
+            elif "through" in entries:
+                _check(entries.keys().isdisjoint(("center", "normal", "radius")))
+                self.forms.append(_THROUGH)
+                self.throughs.append(_through(entries["through"]))
+            else:
+                self.forms.append(_CIRCLE)
+                self.centers.append(entries.get("center"))
+                self.normals.append(entries.get("normal"))
+                self.radii.append(entries.get("radius"))
+        if weights:
+            if len(weights) < len(items):
+                weights.append(1.0)  # the controls given no weight
+            largest = max(weights)
+            _check(all(weight * careful.MAX_WEIGHT_RATIO >= largest for weight in weights))
+
+    def build(self) -> list[CircleControl | PointPairControl]:
+        """The specs, in file order, once every number has passed."""
+        centers = _lengths(self.centers, (len(self.centers), 3))
+        normals = _numbers(self.normals, (len(self.normals), 3))
+        _check(bool(np.all(np.any(normals != 0.0, axis=1))))
+        radii = _lengths(self.radii, (len(self.radii),))
+        _check(bool(np.all(radii > 0.0)))
+        ends_a = _lengths(self.ends_a, (len(self.ends_a), 3))
+        ends_b = _lengths(self.ends_b, (len(self.ends_b), 3))
+        for i in np.flatnonzero(_maybe_coincident(ends_a, ends_b)):
+            _check(not careful._coincident(tuple(ends_a[i].tolist()), tuple(ends_b[i].tolist())))
+        count = len(self.forms)
+        locations = _instances(Location, ("file", "line", "key_path"),
+                               zip(repeat(self.path, count), self.lines, self.key_paths))
+        forms = np.array(self.forms, dtype=np.int8)
+        parts = {}
+        for form, cls, keys, columns in (
+                (_CIRCLE, CircleControl, _CIRCLE_FIELDS,
+                 lambda n: (map(tuple, centers.tolist()), map(tuple, normals.tolist()),
+                            radii.tolist(), repeat(None, n))),
+                (_PAIR, PointPairControl, _PAIR_FIELDS,
+                 lambda n: (map(tuple, ends_a.tolist()), map(tuple, ends_b.tolist()))),
+                (_THROUGH, CircleControl, _CIRCLE_FIELDS,
+                 lambda n: (repeat(None, n), repeat(None, n), repeat(None, n), self.throughs))):
+            where = np.flatnonzero(forms == form).tolist()
+            if where:
+                weights = [self.weights[i] for i in where]
+                mine = [locations[i] for i in where]
+                parts[form] = (where, _instances(cls, keys, zip(*columns(len(where)), weights, mine)))
+        if len(parts) == 1:
+            return next(iter(parts.values()))[1]
+        built = [None] * count
+        for where, instances in parts.values():
+            for i, instance in zip(where, instances):
+                built[i] = instance
+        return built
+
+
+_CIRCLE, _PAIR, _THROUGH = 0, 1, 2
+_CIRCLE_FIELDS = ("center", "normal", "radius", "through", "weight", "location")
+_PAIR_FIELDS = ("a", "b", "weight", "location")
+_CIRCLE_KEYS_LINE = _CIRCLE_KEYS | {""}
+_POINT_PAIR_KEYS_LINE = _POINT_PAIR_KEYS | {""}
+
+
+def _instances(cls: type, keys: tuple[str, ...], rows) -> list:
+    """Frozen dataclass instances of ``cls`` from rows of field values in ``keys`` order, as
+    ``_frozen`` builds them, by maps over builtins (no Python-level loop)."""
+    rows = list(rows)
+    instances = list(map(_new, repeat(cls, len(rows))))
+    fields = map(dict, map(zip, repeat(keys), rows))
+    deque(map(_set, instances, repeat("__dict__"), fields), maxlen=0)
+    return instances
+
+
+def _count_keys(value: object) -> int:
+    """Keys of every mapping in ``value`` (list items' line markers left out)."""
+    if type(value) is dict:
+        return sum(_count_keys(v) for v in value.values()) + len(value) - ("" in value)
+    if type(value) is list:
+        return sum(_count_keys(v) for v in value)
+    return 0
+
+
+def _numbers(values: list, shape: tuple[int, ...]) -> np.ndarray:
+    """``values`` as a float64 array of ``shape``, all finite; ints read as the careful
+    reader reads them (float(int)), anything else (bool, text, None, a huge int) refused."""
+    if not values:
+        return np.zeros(shape)
+    try:
+        array = np.array(values)
+    except (ValueError, TypeError):
+        raise _OutsideSubset("ragged") from None
+    # The subset's flow collections hold only numbers, so a list of numbers is int64 or float64;
+    # anything else (None for a missing key, a nested list, a huge int) is object or another shape.
+    _check(array.shape == shape and array.dtype.kind in "if")
+    array = array.astype(np.float64)
+    _check(bool(np.all(np.isfinite(array))))
+    return array
+
+
+def _lengths(values: list, shape: tuple[int, ...]) -> np.ndarray:
+    array = _numbers(values, shape)
+    _check(bool(np.all(np.abs(array) <= careful.MAX_LENGTH)))
+    return array
+
+
+def _maybe_coincident(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Rows where a and b may be coincident by the careful reader's test (a tenfold margin over
+    its 1e-12 for rounding); only those go through the exact, scalar test."""
+    scale = np.maximum(np.abs(a).max(axis=1, initial=0.0), np.abs(b).max(axis=1, initial=0.0))
+    safe = np.where(scale > 0.0, scale, 1.0)[:, None]
+    a, b = a / safe, b / safe
+    gap = np.linalg.norm(a - b, axis=1)
+    size = np.maximum(np.maximum(np.linalg.norm(a, axis=1), np.linalg.norm(b, axis=1)), 1e-300)
+    return gap <= 10.0 * careful._DEGENERATE_RTOL * size
+
+
+def _through(value: object) -> tuple:
+    """The careful reader's checks of ``through``, the same scalar functions (few in a file)."""
+    _check(type(value) is list and len(value) == 3)
+    points = tuple(tuple(_length(c) for c in _triple(point)) for point in value)
+    for i, j in ((0, 1), (0, 2), (1, 2)):
+        _check(not careful._coincident(points[i], points[j]))
+    _check(not careful._collinear(*points))
+    return points
+
+
+def _triple(value: object) -> list:
+    _check(type(value) is list and len(value) == 3)
+    return value
+
+
+def _length(value: object) -> float:
+    value = _number(value)
+    _check(abs(value) <= careful.MAX_LENGTH)
+    return value
