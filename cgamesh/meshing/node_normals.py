@@ -10,19 +10,25 @@ part of the centreline (on navis' neuron 722817260, a node of radius 68 at a 70-
 onto a span of 70 that thins to 20 reaches 1.69 radii from the centreline, measured at the
 nearest centreline point). No tube through that ring can stay inside the envelope there.
 
-So each interior node's ring is measured, before meshing, against the centreline it belongs to
-near the node: the two spans on either side as the motor tube's own centre curve draws them
-(cubic Hermite spans with chord-length knots, node tangents the mean of the unit chords),
-sampled SPAN_SAMPLES times each, with the radius linear along each span. A ring point's bulge
-is its distance to the nearest of those samples over the radius there (the fidelity measure of
-benchmarks/fidelity.py, restricted to the node's neighbourhood). Where a ring point's bulge
-passes ENVELOPE_LIMIT, the normal is turned in the plane of the turn, from the bisector towards
-one of the two chords (n(w) = (1 - w) u_in + w u_out normalised, w = 1/2 the bisector), by the
-least amount on the grid of TILT_STEPS that brings the ring within the limit, or else to the
-least bulge on the grid. Turning the normal towards the thin span's chord moves the ring's inner
-side back, off the thin span; it also brings that side nearer the centreline before the node,
-so only nodes whose perpendicular ring leaves the envelope are turned (a few per thousand on
-real neurons), and no further than needed.
+So before meshing each interior node is measured against its neighbourhood: the rings the
+motion will draw on its two spans (RINGS_PER_SPAN per span, from the neighbour before to the
+neighbour after: centres on the chord-length Catmull-Rom curve, radii the limited Hermite of
+``motors``, normals the Hermite spline of the node normals) against the centreline of the
+SPANS_AROUND spans on either side (SPAN_SAMPLES samples per span, the radius linear along each).
+A ring point's bulge is its distance to the nearest sample over the radius there (the fidelity
+measure of benchmarks/fidelity.py, restricted to the neighbourhood); the wall folds where a quad
+between consecutive rings faces its ring's centre while others face away. Where the rings at
+the bisector bulge beyond ENVELOPE_LIMIT or fold, the normal turns in the plane of the turn
+(n(w) = (1 - w) u_in + w u_out normalised, w = 1/2 the bisector) by the least step of the grid
+of TILT_STEPS that keeps the rings within the limit without folding; else, where the bisector's
+rings reach beyond HARD_LIMIT, to the least bulge that does not fold; else not at all. Turning
+towards the thin span's chord moves the ring's inner side back, off the thin span; it also
+brings that side nearer the centreline before the node, so only nodes that need it turn (about
+1.5% of a real neuron's nodes), and no further than needed. Nodes are decided in two passes
+(even places along each chain, then odd ones against the even ones' final normals), so that
+every span is measured with its two final ends. A coarse look (COARSE) spares the full measure
+to most nodes, and nodes whose window of radii cannot give a bulge beyond the limit are not
+measured (see ``envelope_normals``). docs/interpolation.md section 12 has the figures.
 
 Every node is measured from its own neighbourhood alone, with the same operations whatever
 other chains are processed with it, so the per-chain and the batched paths agree bit for bit.
@@ -34,10 +40,10 @@ import numpy as np
 
 from cgamesh.geometry.motors import MONOTONE_LIMIT
 
-# A node ring reaching beyond this many radii of the centreline (see the module doc) is turned.
+# A node whose rings reach beyond this many radii of the centreline (see the module doc) turns.
 ENVELOPE_LIMIT = 1.25
 # Centreline samples per span, points per ring, rings measured on each of a node's two spans
-# (the node's own among them), candidate weights w in [0, 1].
+# (the node's own among them).
 SPAN_SAMPLES = 12
 RING_POINTS = 16
 RINGS_PER_SPAN = 8
@@ -49,6 +55,7 @@ COARSE_LIMIT = 1.1
 # Rings at the bisector beyond this (the target no vertex may pass) turn to their least bulge
 # even when no turn brings them within ENVELOPE_LIMIT.
 HARD_LIMIT = 1.6
+# Candidate weights w in [0, 1] (sixteenths).
 TILT_STEPS = 17
 # Spans of the centreline on each side of a node that its rings are measured against.
 SPANS_AROUND = 2
@@ -189,8 +196,9 @@ def _normal_span(tangents, length, first_of, last_of, node, candidate, s, before
         n_a, n_b = tangents[a][:, None].repeat(n_node.shape[1], axis=1), n_node
         span = length[a]
         secant = (n_b - n_a) / span[:, None, None]
+        back = np.maximum(a - 1, 0)
         previous = np.where((a == first_of[a])[:, None, None], secant,
-                            ((tangents[a] - tangents[np.maximum(a - 1, 0)]) / length[np.maximum(a - 1, 0)][:, None])[:, None])
+                            ((tangents[a] - tangents[back]) / length[back][:, None])[:, None])
         following = (tangents[node + 1][:, None] - n_node) / length[node][:, None, None]
         m_a, m_b = 0.5 * (previous + secant), 0.5 * (secant + following)
     else:
@@ -199,8 +207,9 @@ def _normal_span(tangents, length, first_of, last_of, node, candidate, s, before
         span = length[a]
         secant = (n_b - n_a) / span[:, None, None]
         preceding = (n_node - tangents[node - 1][:, None]) / length[node - 1][:, None, None]
+        ahead = np.minimum(b + 1, len(tangents) - 1)
         beyond = np.where((b == last_of[b])[:, None, None], secant,
-                          ((tangents[np.minimum(b + 1, len(tangents) - 1)] - tangents[b]) / length[b][:, None])[:, None])
+                          ((tangents[ahead] - tangents[b]) / length[b][:, None])[:, None])
         m_a, m_b = 0.5 * (preceding + secant), 0.5 * (secant + beyond)
     t = s[None, None, :, None]
     h00, h10 = 2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t
