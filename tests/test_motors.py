@@ -549,3 +549,23 @@ def test_the_tracer_traces_motor_surfaces_without_the_mesher():
             "print(sorted(m for m in sys.modules if m.startswith('cgamesh.meshing')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+def test_centreline_inputs_are_meshed_with_motor_interpolation(tmp_path):
+    """Streamlines, skeletons and arrays default to motor: two samples 10 radii apart give rings
+    of the sample radius all along (blade circles would balloon to sqrt(1 + 5^2) = 5.1 radii
+    half-way), through the Python API and an SWC file alike."""
+    import cgamesh
+    from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+    from cgamesh.inputs.swc import read_swc
+
+    points = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [20.0, 3.0, 0.0]])
+    meshes = cgamesh.tubes([points], radii=1.0, around=8, subdivide=7, split=True)
+    rings = meshes.positions.reshape(-1, 9, 3)[:, :-1]
+    radius = np.linalg.norm(rings - rings.mean(axis=1, keepdims=True), axis=2)
+    np.testing.assert_allclose(radius, 1.0, rtol=1e-9)
+    swc = tmp_path / "two.swc"
+    swc.write_text("1 3 0 0 0 1 -1\n2 3 10 0 0 1 1\n3 3 20 3 0 1 2\n")
+    built = mesh_centerlines(read_swc(swc), TubeOptions(around=8, subdivide=7, split=True))
+    grid = built.meshes[0].positions[: 17 * 9].reshape(17, 9, 3)[:, :-1]
+    np.testing.assert_allclose(np.linalg.norm(grid - grid.mean(axis=1, keepdims=True), axis=2), 1.0, rtol=1e-9)
