@@ -569,3 +569,21 @@ def test_centreline_inputs_are_meshed_with_motor_interpolation(tmp_path):
     built = mesh_centerlines(read_swc(swc), TubeOptions(around=8, subdivide=7, split=True))
     grid = built.meshes[0].positions[: 17 * 9].reshape(17, 9, 3)[:, :-1]
     np.testing.assert_allclose(np.linalg.norm(grid - grid.mean(axis=1, keepdims=True), axis=2), 1.0, rtol=1e-9)
+
+
+def test_a_linear_motor_span_between_equal_controls_is_dropped_as_for_blade():
+    """A repeated control on a linear curve is one circle, not a span of no area (the input-space
+    property found a zero normal there: a ring on the stationary span, with numpy warnings as
+    errors): the surface is that of the controls without the repeat, ring for ring."""
+    import warnings
+
+    centres = [[0, 0, 0], [0, 0, 0], [1.34, 0, 0.67], [2.4, 0, 1.73]]
+    normals = [[1, 0, 0]] * 4
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        repeated = mesh_surface(motor_spec(centres, normals, [1.0] * 4, curve="linear", align=False),
+                                Resolution(around=3, along=2))
+        single = mesh_surface(motor_spec(centres[1:], normals[1:], [1.0] * 3, curve="linear", align=False),
+                              Resolution(around=3, along=2))
+    np.testing.assert_allclose(repeated.positions, single.positions, atol=1e-12)
+    np.testing.assert_allclose(repeated.normals, single.normals, atol=1e-12)
