@@ -26,6 +26,7 @@ from scipy.spatial import cKDTree
 
 from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
 from cgamesh.material import Material
+from cgamesh.meshing.node_normals import envelope_normals
 from cgamesh.pipeline import Resolution, mesh_surface
 
 # Centreline samples per radius of arc length.
@@ -90,10 +91,18 @@ def path_tangents(centres: np.ndarray) -> np.ndarray:
     return tangent
 
 
+def node_normals(chain: Chain) -> np.ndarray:
+    """The ring normals cgamesh gives a centreline input's nodes (``centerline_pipeline``): the
+    bisectors of the path, turned where a node's rings would leave the radius envelope
+    (``cgamesh.meshing.node_normals``)."""
+    return envelope_normals(chain.centres, chain.radii, path_tangents(chain.centres), np.array([0]),
+                            np.array([len(chain.centres)]))
+
+
 def chain_spec(chain: Chain, interpolation: str, name: str = "chain") -> SurfaceSpec:
-    """A circles surface through the chain's samples, normals along the path, Catmull-Rom."""
+    """A circles surface through the chain's samples, normals as for centreline inputs, Catmull-Rom."""
     here = Location(name, 1, name)
-    normals = path_tangents(chain.centres)
+    normals = node_normals(chain)
     controls = tuple(CircleControl(tuple(map(float, c)), tuple(map(float, n)), float(r), None, 1.0, here)
                      for c, n, r in zip(chain.centres, normals, chain.radii))
     along = RINGS_PER_SEGMENT * (len(controls) - 1) + 1

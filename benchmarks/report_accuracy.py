@@ -311,11 +311,27 @@ def main() -> None:
         + text + "\n\n## The tracer's root finders\n\n"
         "The paper's sampled finder (N objects per segment, sign changes, local quadratic) against\n"
         "the closed-form polynomial finder, on the fig. 17 scene; errors relative to the surface's\n"
-        "bounding radius. Plot: `figures/root_finders.png`.\n\n" + finders + "\n"
+        "bounding radius. Plot: `figures/root_finders.png`.\n\n" + finders + "\n" + BLADE_AGAINST_MOTOR
     )
     print(text)
     print(against)
     print(finders)
+
+
+# The blade / motor comparison: a figure of its own script (benchmarks/figure_blade_motor.py).
+BLADE_AGAINST_MOTOR = """
+## Blade against motor interpolation
+
+The same streamline of dipy's `cb_2.npz` (18 samples 2–8 mm apart, tube radius 0.25 mm)
+meshed with `interpolation: blade` and `interpolation: motor`, and each ring's radius over the
+sample radius: blade rings balloon up to 3.95× between samples (most at the open ends) and pinch
+below 1 at two of them; motor rings keep the radius. Regenerate with
+`python benchmarks/figure_blade_motor.py`; the bulge, neck and fold statistics of both, and of
+pyvista's tubes, over whole tractograms and neurons are `python benchmarks/bench_fidelity.py`
+(docs/interpolation.md section 11).
+
+![One streamline both ways](figures/blade_vs_motor.png)
+"""
 
 
 if __name__ == "__main__":

@@ -28,6 +28,7 @@ from cgamesh.inputs.centerlines import Centerlines
 from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.meshing.node_normals import envelope_normals
 
 UP_AXES = ("x", "y", "z")
 COLOR_MODES = ("none", "radius", "direction", "segment")  # or the name of a per-point scalar
@@ -243,7 +244,8 @@ def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segm
     nodes, p, tube_radii = nodes[distinct], p[distinct], tube_radii[distinct]
     if len(nodes) < 2:
         raise DegenerateGeometryError(f"{where}: expected at least two distinct points, got {len(nodes)}")
-    t = node_tangents(p)
+    # ring normals: the path's bisectors, turned where a node ring would leave the radius envelope
+    t = envelope_normals(p, tube_radii, node_tangents(p), np.array([0]), np.array([len(p)]))
     tangents[nodes[-1]] = t[-1]
     tangents[nodes[0]] = np.where(segment_of[nodes[0]] == SOMA_SEGMENT, t[0], tangents[nodes[0]])
     segment_of[nodes[-1]] = index

@@ -5,9 +5,8 @@ of radius 0.25 mm) and a realistic neuron (a seeded random skeleton: branches, u
 1 to 6 radii, turns up to 75 degrees, radii tapering with noise), against the chord-length
 Catmull-Rom centreline through each unbranched chain (radius linear in arc length): at most
 0.1% of the vertices bulge beyond 1.25 radii and none beyond 1.6, and no segment folds. Blade
-interpolation of the same samples balloons, which shows the statistic can fail. A slow test
-holds the benchmark's own neuron (navis' 722817260.swc) to the same targets, beyond 1.6 only
-where an input node circle already reaches.
+interpolation of the same samples balloons, which shows the statistic can fail. Slow tests
+hold navis' five example neurons (the benchmark's is 722817260.swc) to the same targets.
 """
 
 from __future__ import annotations
@@ -96,16 +95,58 @@ def test_the_measure_sees_a_tube_too_wide_and_too_narrow():
         assert result.neck_min == pytest.approx(factor, rel=3e-2)  # rings 1.25 radii apart
 
 
-def shipped_neuron() -> list[fidelity.Chain]:
+def navis_neurons() -> list[Path]:
     spec = importlib.util.find_spec("navis")
-    assert spec is not None, "navis (test extra) ships the neuron 722817260.swc"
-    return fidelity.swc_chains(Path(spec.submodule_search_locations[0]) / "data" / "swc" / "722817260.swc")
+    assert spec is not None, "navis (test extra) ships the example neurons"
+    files = sorted((Path(spec.submodule_search_locations[0]) / "data" / "swc").glob("*.swc"))
+    assert len(files) == 5, files
+    return files
 
 
-def node_circle_bulge(chain: fidelity.Chain, line: fidelity.Centreline, samples: int = 360) -> np.ndarray:
-    """(n,) the largest bulge of each node's own circle (the tube's input: centre, radius and the
-    turn's bisector as normal, as ``fidelity.chain_spec`` gives it), densely sampled."""
-    normal = fidelity.path_tangents(chain.centres)
+@pytest.mark.slow
+@pytest.mark.parametrize("path", navis_neurons(), ids=lambda p: p.stem)
+def test_motor_tubes_of_every_shipped_neuron_stay_inside_the_envelope(path):
+    """navis' five example neurons (the benchmark's is 722817260.swc; 1,300 chains and 575,000
+    vertices each, 5-25 s apiece on a shared 2-core machine), with the ring normals cgamesh
+    gives centreline inputs: at most 0.1% of the vertices beyond 1.25 radii, none beyond 1.6,
+    no fold. (With the path's bisectors alone, a node of radius 68 at a 70-degree turn onto a
+    span of 70 that thins to 20 reached 1.69 radii by itself, and one neuron 1.71.)"""
+    chains = fidelity.swc_chains(path)
+    result = fidelity.measure(chains, lambda c: fidelity.cgamesh_tube(c, "motor"), "catmull_rom")
+    assert result.vertices > 500_000 and result.failed_chains == 0
+    assert result.bulge_over_125 <= 0.001, result
+    assert result.bulge_max <= 1.6, result
+    assert result.folded == 0, result
+
+
+def test_node_normals_turn_only_where_a_ring_would_leave_the_envelope(monkeypatch):
+    """The benchmark neuron's worst node as a chain of its own (radius 68 at a 70-degree turn onto
+    a span of 70 that thins to 20): its ring, perpendicular to the path, reaches 1.69 radii from
+    the centreline, and so does the tube through it; the turned normal brings the tube within
+    the target of 1.6 (1.34: the choice measures a model of the rings) without folding it. A chain
+    whose radius is constant keeps the path's bisectors exactly."""
+    centres = np.array([[5574.63, 22199.1, 15837.1], [5596.0, 22236.0, 15720.0], [5618.0, 22302.0, 15720.0],
+                        [5618.0, 22324.0, 15720.0]])
+    chain = fidelity.Chain(centres, np.array([62.7873, 68.3221, 20.1127, 11.0]))
+    line = fidelity.centreline([chain], "catmull_rom")[0]
+    bisector = fidelity.path_tangents(centres)
+    turned = fidelity.node_normals(chain)
+    assert np.degrees(np.arccos(np.clip(np.dot(turned[1], bisector[1]), -1.0, 1.0))) > 1.0
+    np.testing.assert_array_equal(turned[[0, 3]], bisector[[0, 3]])  # chain ends keep their chords
+    assert node_circle_bulge(chain, line, bisector).max() > 1.6  # the input as the path alone orients it
+    result = fidelity.measure([chain], lambda c: fidelity.cgamesh_tube(c, "motor"), "catmull_rom")
+    assert result.bulge_max <= 1.6 and result.folded == 0, result
+    monkeypatch.setattr(fidelity, "node_normals", lambda c: fidelity.path_tangents(c.centres))
+    plain = fidelity.measure([chain], lambda c: fidelity.cgamesh_tube(c, "motor"), "catmull_rom")
+    assert plain.bulge_max > 1.6 and plain.bulge_max > result.bulge_max + 0.2, plain
+    monkeypatch.undo()
+    constant = fidelity.Chain(centres, np.full(4, 68.0))
+    np.testing.assert_array_equal(fidelity.node_normals(constant), fidelity.path_tangents(centres))
+
+
+def node_circle_bulge(chain: fidelity.Chain, line: fidelity.Centreline, normal: np.ndarray,
+                      samples: int = 360) -> np.ndarray:
+    """(n,) the largest bulge of each node's own circle (centre, radius, the given normal), densely sampled."""
     u = np.cross(normal, np.where(np.abs(normal[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]]))
     u /= np.linalg.norm(u, axis=1, keepdims=True)
     v = np.cross(normal, u)
@@ -114,29 +155,3 @@ def node_circle_bulge(chain: fidelity.Chain, line: fidelity.Centreline, samples:
         np.cos(a)[None, :, None] * u[:, None, :] + np.sin(a)[None, :, None] * v[:, None, :])
     distance, nearest = cKDTree(line.points).query(points.reshape(-1, 3))
     return (distance / line.radius[nearest]).reshape(len(chain.centres), samples).max(axis=1)
-
-
-@pytest.mark.slow
-def test_motor_tubes_of_the_benchmark_neuron_stay_inside_the_envelope():
-    """benchmarks/bench_fidelity.py's neuron (1,289 chains, 575,000 vertices; 4-20 s on a shared 2-core machine): at most 0.1%
-    of the vertices beyond 1.25 radii, no fold, and no vertex beyond 1.6 radii where the node
-    circles do not already reach there. The node circles are the input (centre, radius, the
-    turn's bisector as normal) and pass through the tube exactly; one of them, radius 68 at a
-    70-degree turn onto a span of 70 that thins to 20, reaches 1.69 radii over the thin span by
-    itself, so a vertex of its spans may bulge up to what that node circle does, no more."""
-    chains = shipped_neuron()
-    lines = fidelity.centreline(chains, "catmull_rom")
-    bulges, allowed = [], []
-    for chain, line in zip(chains, lines):
-        tube = fidelity.cgamesh_tube(chain, "motor")
-        distance, nearest = cKDTree(line.points).query(tube.vertices)
-        bulges.append(distance / line.radius[nearest])
-        node = node_circle_bulge(chain, line)
-        segment = np.repeat(tube.segment, fidelity.AROUND)
-        allowed.append(np.maximum(1.6, np.maximum(node[segment], node[segment + 1]) + 1e-9))
-        assert not fidelity.folded_segments(tube)
-    bulge, allowed = np.concatenate(bulges), np.concatenate(allowed)
-    assert len(bulge) > 500_000
-    assert np.mean(bulge > 1.25) <= 0.001, np.mean(bulge > 1.25)
-    assert np.all(bulge <= allowed), (bulge[bulge > allowed], allowed[bulge > allowed])
-    assert np.sum(bulge > 1.6) <= 1e-5 * len(bulge), np.sort(bulge)[-10:]

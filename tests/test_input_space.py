@@ -1,7 +1,8 @@
 """Property tests over the input space a scene file reaches.
 
 Orientations drawn from the exact +-axes as often as from the sphere, every curve kind and
-object kind, caps / closed / align in every allowed combination, resolutions at their bounds,
+object kind, both interpolations of circles (blade and motor), caps / closed / align in every
+allowed combination, resolutions at their bounds,
 sizes and distances over many decades, a control repeated exactly or 1e-9 of the size apart.
 Each scene either meshes (finite positions, unit normals
 orthogonal to their circle or ruling, the first ring on the first control and the last on the
@@ -44,6 +45,7 @@ def scenes(draw):
     count = draw(st.integers(3 if closed else 2, 5))
     align = draw(st.booleans())
     caps = kind == "circles" and not closed and draw(st.booleans())
+    interpolation = draw(st.sampled_from(("blade", "motor"))) if kind == "circles" else "blade"
     scale = 10.0 ** draw(st.integers(-3, 3))
     offset = np.array(draw(st.tuples(coordinate, coordinate, coordinate))) * 10.0 ** draw(st.integers(0, 4))
     step = np.array(draw(direction))
@@ -80,6 +82,7 @@ def scenes(draw):
     along = draw(st.sampled_from((2, 3, 17, 40)))
     body = "".join(f"      - {c[-1]}\n" for c in controls)
     text = (f"cgamesh: 1\nsurfaces:\n  - name: s\n    type: {kind}\n    curve: {curve}\n"
+            f"    interpolation: {interpolation}\n"
             f"    closed: {str(closed).lower()}\n    align: {str(align).lower()}\n    caps: {str(caps).lower()}\n"
             f"    resolution: {{around: {around}, along: {along}}}\n    controls:\n{body}")
     return text, kind, controls, around, caps, closed

@@ -192,8 +192,10 @@ def test_node_rings_pass_through_the_node_circles_of_a_real_neuron():
         rings = tubes[i].positions.reshape(-1, options.around + 1, 3)[:: options.subdivide + 1]
         assert len(rings) == len(nodes)
         from cgamesh.centerline_pipeline import node_tangents
+        from cgamesh.meshing.node_normals import envelope_normals
 
-        t = node_tangents(p)
+        # the path's bisectors, turned at the few nodes whose rings would leave the envelope
+        t = envelope_normals(p, radii[nodes], node_tangents(p), np.array([0]), np.array([len(p)]))
         offset = rings - p[:, None, :]
         scale = 1e-9 * np.abs(p).max()
         np.testing.assert_allclose(np.linalg.norm(offset, axis=2), np.broadcast_to(radii[nodes][:, None], offset.shape[:2]),

@@ -127,6 +127,11 @@ def _circle_blade(control, frame: LocalFrame) -> np.ndarray:
     )
 
 
+# Motor controls whose centre, normal and radius (local units: the controls fill the unit ball)
+# differ by no more than this are the same circle.
+SAME_CIRCLE = 1e-14
+
+
 def build_motor_surface(spec: SurfaceSpec) -> MotorSurface:
     """The splined similarity motion through a circle surface's controls (docs/interpolation.md).
 
@@ -140,6 +145,13 @@ def build_motor_surface(spec: SurfaceSpec) -> MotorSurface:
     except CgameshError as error:
         raise type(error)(f"{spec.location}: {error}") from None
     weights = tuple(c.weight for c in spec.controls) if spec.curve == "rational_bezier" else None
+    if spec.curve == "linear" and len(centre) > 2:
+        # As for blade surfaces: a linear span between two equal circles is that one circle, so
+        # the repeat is dropped (the same surface, and no ring spent on a span of no area)
+        same = np.all(np.abs(np.diff(np.hstack([centre, normal, radius[:, None]]), axis=0)) <= SAME_CIRCLE, axis=1)
+        if not same.all():
+            keep = np.concatenate([[True], ~same])
+            centre, normal, radius = centre[keep], normal[keep], radius[keep]
     path = MotionSpline.through(centre, normal, radius, spec.curve, spec.closed, spec.tension, spec.bias,
                                 spec.continuity, weights, spec.align)
     return MotorSurface(spec.name, path, frame)

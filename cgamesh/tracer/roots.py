@@ -53,11 +53,16 @@ Motor surfaces (docs/interpolation.md) have no interpolant C' whose blend is pol
 alpha, so no exact intersection polynomial. "polynomial" then samples (L v C)^2 on the
 MOTOR_PROXY_DEGREE + 1 circles at a segment's Chebyshev points and takes the real roots of
 the interpolating Chebyshev series (a proxy of the smooth function: colleague-matrix
-eigenvalues, as for blade surfaces); "sampled" is the sampled finder at N + 1 circles,
-which, as for blade surfaces, misses two roots within one step (a ray in or near a circle's
-plane meets it twice: a double root the samples only touch), so ``verify`` on motor
-surfaces wants the default. Either way each candidate gets MOTOR_NEWTON_STEPS Newton steps on the true function (dC/dt in closed
-form) and is accepted like a polynomial root, by its residual.
+eigenvalues, as for blade surfaces); "sampled" is the sampled finder at N + 1 circles:
+its sign changes, plus a pair of starting points at every dip of |f| that does not change
+sign (``sampled.dip_pairs``: a ray in or near a circle's plane meets the tube twice within a
+fraction of a step, the samples only touch the pair). The proxy's candidates get
+MOTOR_NEWTON_STEPS Newton steps on the true function (dC/dt in closed form); the sampled
+finder's get up to MOTOR_PAIR_STEPS (Newton's steps only halve the error of a pair until they
+resolve it), and the second of a pair (a dip's, or two sign changes either side of one sample
+that converged on one root) is polished on f / (t - t1), t1 the first's root (deflation), so
+that the two converge on the two roots, not twice on the nearer one. Every candidate is then
+accepted like a polynomial root, by its residual.
 """
 
 from __future__ import annotations
@@ -86,6 +91,13 @@ REFINE_BELOW = 1e-2
 REFINE_STEPS = 3
 # Newton steps polishing every sampled root of a motor surface.
 MOTOR_NEWTON_STEPS = 6
+# ... and the roots of a pair at a dip of the sampled finder: Newton's steps only halve the
+# error until they resolve the pair (a double root), so more of them, stopping when converged.
+MOTOR_PAIR_STEPS = 40
+# A candidate's Newton iteration stops once its step (in t) is below this.
+NEWTON_CONVERGED = 1e-15
+# Two polished roots of one ray closer than this (in t) are one root found twice.
+PAIR_MERGED = 1e-12
 # Degree of the Chebyshev proxy of (L v C)^2 on a motor segment.
 MOTOR_PROXY_DEGREE = 32
 # |F| below this fraction of its largest on a segment may be a zero of W- for every ray ...
@@ -356,16 +368,37 @@ class SurfaceRoots:
         which, t = (np.concatenate(parts) for parts in zip(*found))
         return which, t
 
-    def _sampled(self, coefficients: np.ndarray, segment: int, count: int) -> tuple[np.ndarray, np.ndarray]:
-        """(ray index (R,), t (R,)) of the sampled finder's roots on a segment, in chunks."""
+    def _sampled(self, lines: np.ndarray, coefficients: np.ndarray, segment: int,
+                 count: int) -> tuple[np.ndarray, np.ndarray]:
+        """(ray index (R,), t (R,)) of the sampled finder's roots on a segment (motor surfaces),
+        in chunks, polished: sign changes by Newton steps (deflated where two converged on one
+        root), the pairs at dips by Newton steps on the first and deflated steps on the second
+        (see the module doc)."""
         samples = self.samples_of(segment, count)
         chunk = max(1, SAMPLED_CHUNK // samples.matrix.shape[1])
         found = [(np.zeros(0, dtype=np.int64), np.zeros(0))]
         for start in range(0, len(coefficients), chunk):
             values = meet_values(coefficients[start:start + chunk], samples.matrix, self.grade)
             f = _square(values) if self.grade == 3 else values[..., 0]
-            found.append(sampled.sign_change_roots(f, samples.t))
-            found[-1] = (start + found[-1][0], found[-1][1])
+            which, start_t = sampled.sign_change_roots(f, samples.t, grazing=False)
+            which = start + which
+            t = self.newton(lines[which], start_t, segment, MOTOR_PAIR_STEPS)
+            # two sign changes on either side of one sample (a pair straddling it) may converge
+            # on the same root: the second of each such pair is polished again, deflated
+            order = np.lexsort((t, which))
+            same = (np.diff(which[order]) == 0) & (np.diff(t[order]) <= PAIR_MERGED)
+            again, kept = order[1:][same], order[:-1][same]
+            t[again] = self.newton(lines[which[again]], start_t[again], segment, MOTOR_PAIR_STEPS,
+                                   deflate=t[kept])
+            found.append((which, t))
+            row, first, second = sampled.dip_pairs(f, samples.t)
+            row = start + row
+            root = self.newton(lines[row], first, segment, MOTOR_PAIR_STEPS)
+            # the other root of the pair: the parabola's roots sum to twice its extremum, so the
+            # mirror of the first root about it is where the second is expected
+            other = self.newton(lines[row], np.clip(first + second - root, segment, segment + 1.0), segment,
+                                MOTOR_PAIR_STEPS, deflate=root)
+            found.append((np.concatenate([row, row]), np.concatenate([root, other])))
         which, t = (np.concatenate(parts) for parts in zip(*found))
         return which, t
 
@@ -412,20 +445,34 @@ class SurfaceRoots:
             return np.abs(_square(value)) / (size * size)
         return np.abs(value[:, 0]) / size
 
-    def newton(self, lines: np.ndarray, t: np.ndarray, segment: int, steps: int = REFINE_STEPS) -> np.ndarray:
+    def newton(self, lines: np.ndarray, t: np.ndarray, segment: int, steps: int = REFINE_STEPS,
+               deflate: np.ndarray | None = None) -> np.ndarray:
         """Newton steps on the true function (L v C)^2 (or L v P) with dC/dt from the projection's
-        closed-form derivative, inside the segment."""
+        closed-form derivative, inside the segment. With ``deflate`` (roots r (R,) already
+        found), on g = f / (t - r) instead: its step g / g' = f d / (f' d - f), d = t - r, does
+        not fall back into r (where g keeps a root only if f has a double root there). A
+        candidate whose step falls to NEWTON_CONVERGED stops there."""
+        t = t.copy()
+        active = np.arange(t.size)
         for _ in range(steps):
-            projection = self.surface.sample(t)
-            value = self.line_values(lines, projection.blades)
-            rate = self.line_values(lines, projection.derivatives)
+            if active.size == 0:
+                break
+            at = t[active]
+            projection = self.surface.sample(at)
+            value = self.line_values(lines[active], projection.blades)
+            rate = self.line_values(lines[active], projection.derivatives)
             if self.grade == 3:
                 f, df = _square(value), 2.0 * _dot(value, rate)
             else:
                 f, df = value[:, 0], rate[:, 0]
+            if deflate is not None:
+                d = at - deflate[active]
+                f, df = f * d, df * d - f
             with np.errstate(divide="ignore", invalid="ignore"):
                 step = np.where(df != 0.0, f / df, 0.0)
-            t = np.clip(t - np.clip(np.nan_to_num(step), -0.1, 0.1), segment, segment + 1.0)
+            step = np.clip(np.nan_to_num(step), -0.1, 0.1)
+            t[active] = np.clip(at - step, segment, segment + 1.0)
+            active = active[np.abs(step) > NEWTON_CONVERGED]
         return t
 
     def true_roots(self, lines: np.ndarray, t: np.ndarray, segment: int, rtol: float):
@@ -455,10 +502,10 @@ class SurfaceRoots:
         g = self.grade
         if self.motor:
             if finder.kind == "sampled":
-                which, t = self._sampled(coefficients, segment, finder.samples)
+                which, t = self._sampled(lines, coefficients, segment, finder.samples)
             else:
                 which, t = self._proxy_roots(coefficients, segment)
-            t = self.newton(lines[which], t, segment, MOTOR_NEWTON_STEPS)
+                t = self.newton(lines[which], t, segment, MOTOR_NEWTON_STEPS)
             objects = self.objects(t)[0]
             ok = self.residual(lines[which], objects) <= rtol
             return rows[which][ok], t[ok], objects[ok]

@@ -6,6 +6,17 @@ solves a quadratic through three samples around each change. A ray that only tou
 surface (a grazing double root) makes f touch zero without changing sign, which this misses;
 so local extrema of |f| between samples of one sign are also fitted with the quadratic
 through them, and where that parabola crosses zero its two roots are reported too.
+
+``dip_pairs`` serves a caller that polishes every root on the true function and keeps it by
+its residual (motor surfaces). There a dip is the place of two roots (or a double root) closer
+together than the samples, and the parabola through three samples finds them only roughly:
+f's cubic term over a step of 1/64 of a segment is enough to lift the parabola's extremum off
+zero, or to put both its roots on the same side of the true pair. A ray along a tube's normal
+(``verify`` casts one through every vertex) lies nearly in that ring's plane and meets the
+tube twice within a small fraction of a step, once at the vertex and once across the ring, so
+every vertex is such a pair. The dip is therefore reported as a pair of starting points (the
+parabola's two roots, or its extremum twice where it does not cross zero) for the caller to
+converge on both roots.
 """
 
 from __future__ import annotations
@@ -35,6 +46,49 @@ def _quadratic_roots(a, b, c) -> tuple[np.ndarray, np.ndarray]:
         r1 = np.where(linear, -c / b, r1)
         r2 = np.where(linear, np.nan, r2)
     return r1, r2
+
+
+def _dips(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(row, k) of every interior local minimum of |f| at sample k + 1 between samples of its sign."""
+    left, mid, right = values[:, :-2], values[:, 1:-1], values[:, 2:]
+    same = (left * mid > 0.0) & (mid * right > 0.0)
+    return np.nonzero(same & (np.abs(mid) <= np.abs(left)) & (np.abs(mid) < np.abs(right)))
+
+
+def dip_pairs(values: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Starting points of the root pairs at the dips of sampled functions: (row (D,), first (D,),
+    second (D,)) for values (N, K) at params (K,).
+
+    At every interior local minimum of |f| between samples of one sign, and at a first or last
+    sample where |f| is least (the three samples there of one sign), the parabola q through
+    the three samples gives its two roots where it crosses zero, else its extremum twice (a
+    pair that q only nearly touches: f may still cross, or touch, zero there), each clipped to
+    the three samples' range. The caller polishes both and keeps what the residual accepts (a
+    near miss of the ray then costs two rejected candidates).
+    """
+    count = values.shape[1]
+    if count < 3:
+        return np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0)
+    row, k = _dips(values)
+    # |f| least at a first or last sample: the pair may lie between it and its neighbour, inside
+    # this segment (the dip continues past the segment's end, where these samples stop)
+    start = np.flatnonzero((values[:, 0] * values[:, 1] > 0.0) & (values[:, 1] * values[:, 2] > 0.0)
+                           & (np.abs(values[:, 0]) < np.abs(values[:, 1])))
+    end = np.flatnonzero((values[:, -1] * values[:, -2] > 0.0) & (values[:, -2] * values[:, -3] > 0.0)
+                         & (np.abs(values[:, -1]) < np.abs(values[:, -2])))
+    row = np.concatenate([row, start, end])
+    k = np.concatenate([k, np.zeros(start.size, dtype=k.dtype), np.full(end.size, count - 3, dtype=k.dtype)])
+    cols = k[:, None] + np.arange(3)
+    x, y = params[cols], values[row[:, None], cols]
+    a, b, c = _quadratic(x, y)
+    r1, r2 = _quadratic_roots(a, b, c)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        vertex = np.where(a != 0.0, -b / (2.0 * a), 0.0)
+    real = np.isfinite(r1) & np.isfinite(r2)
+    lo, hi = x[:, 0] - x[:, 1], x[:, 2] - x[:, 1]
+    first = np.clip(np.where(real, r1, vertex), lo, hi)
+    second = np.clip(np.where(real, r2, vertex), lo, hi)
+    return row, x[:, 1] + first, x[:, 1] + second
 
 
 def sign_change_roots(values: np.ndarray, params: np.ndarray,
@@ -74,10 +128,7 @@ def sign_change_roots(values: np.ndarray, params: np.ndarray,
         params_out.append(params[k] + (params[k + 1] - params[k]) * values[row, k] / (values[row, k] - values[row, k + 1]))
 
     if grazing and count >= 3:
-        left, mid, right = values[:, :-2], values[:, 1:-1], values[:, 2:]
-        same = (left * mid > 0.0) & (mid * right > 0.0)
-        dip = same & (np.abs(mid) <= np.abs(left)) & (np.abs(mid) < np.abs(right))
-        row, k = np.nonzero(dip)
+        row, k = _dips(values)
         if row.size:
             cols = k[:, None] + np.arange(3)
             x, y = params[cols], values[row[:, None], cols]

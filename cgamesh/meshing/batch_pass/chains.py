@@ -1,7 +1,7 @@
 """Centreline chains through the batched pass: the per-chain pipeline's tubes, for all chains at once.
 
 ``tube_pieces`` does for every chain what ``centerline_pipeline._tube`` does for one (soma
-radii, exact duplicates merged, node tangents, the chain's local frame, the motion, the mesh,
+radii, exact duplicates merged, node tangents and ring normals, the chain's local frame, the motion, the mesh,
 its attributes and direction colours, the junction bookkeeping), as arrays over every chain.
 Chains the batched pass does not take (a node inside the soma, fewer than two distinct
 points, or a surface needing a per-chain repair, see ``rings``) go through the per-chain
@@ -21,6 +21,7 @@ from cgamesh.meshing.batch_pass.motions import ChainMotions, ChainNodes
 from cgamesh.meshing.batch_pass.rings import TubeArrays, mesh_chains
 from cgamesh.meshing.circles import _grid_weld  # the per-chain mesher's seam weld, shared
 from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.meshing.node_normals import envelope_normals
 
 # Rings meshed per chunk: the circle blades and their products (about 3 kB per ring) stay
 # within a core's cache (measured: 2,048 rings ~25% faster than 16,384 on the fornix).
@@ -88,8 +89,9 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
     m_count = kept_counts * meshable
     m_first = np.concatenate([[0], np.cumsum(m_count)[:-1]]).astype(np.int64)
     m_p = points[m_nodes]
-    m_t = _segment_tangents(m_p, m_first[meshable], m_count[meshable]) if len(m_p) else np.zeros((0, 3))
     m_r = radii[m_nodes]
+    m_t = (envelope_normals(m_p, m_r, _segment_tangents(m_p, m_first[meshable], m_count[meshable]),
+                            m_first[meshable], m_count[meshable]) if len(m_p) else np.zeros((0, 3)))
 
     arrays: dict[int, tuple] = {}
     fallback = meshable & mixed
