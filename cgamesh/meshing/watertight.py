@@ -72,8 +72,25 @@ def union(pieces: Sequence[SurfaceMesh], name: str) -> SurfaceMesh:
     props = np.array(out.vert_properties, dtype=np.float64)  # a copy we may write to
     tris = np.asarray(out.tri_verts, dtype=np.int64)
     source = _source_corners(out, tris, piece_of_id, rows, faces)
-    _fix_new_vertices(props, tris, source, colors, name)
+    new = _fix_new_vertices(props, tris, source, colors, name)
+    props, tris = _on_float32_grid(props, tris, new, name)
     return _surface_mesh(name, props, tris, colors, attribute_names)
+
+
+def _on_float32_grid(props: np.ndarray, tris: np.ndarray, new: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """Positions rounded to the grid every float32 writer stores exactly, the triangles that
+    rounding left crossing or flat repaired (``cgamesh.meshing.float32_grid``; the few it cannot
+    yet repair are left as they are), unused vertices dropped."""
+    from cgamesh.meshing.float32_grid import grid_step, repair
+
+    step = grid_step(props[:, _POSITION])
+    topology = weld_by_position(props[:, _POSITION])  # before rounding: the union's own vertices
+    positions, tris, _ = repair(props[:, _POSITION], step, tris, topology, new)
+    props[:, _POSITION] = positions
+    used = np.zeros(len(props), dtype=bool)
+    used[tris.ravel()] = True
+    index = np.cumsum(used) - 1
+    return props[used], index[tris]
 
 
 def _float32_tolerance(rows: list[np.ndarray]) -> float:
@@ -141,9 +158,10 @@ def _source_corners(out, tris: np.ndarray, piece_of_id: dict[int, int], rows: li
     return all_rows[all_faces[face]]
 
 
-def _fix_new_vertices(props: np.ndarray, tris: np.ndarray, source: np.ndarray, colors: bool, name: str) -> None:
+def _fix_new_vertices(props: np.ndarray, tris: np.ndarray, source: np.ndarray, colors: bool, name: str) -> np.ndarray:
     """Give vertices made by the union (on cut lines) their final values, in place; vertices
-    whose row is one of their source triangle's corners are left exactly as they are."""
+    whose row is one of their source triangle's corners are left exactly as they are. Returns
+    (V,) whether each vertex is new."""
     corners = props[tris]  # (T, 3, P)
     kept_corner = np.zeros(tris.shape, dtype=bool)
     for j in range(3):
@@ -152,7 +170,7 @@ def _fix_new_vertices(props: np.ndarray, tris: np.ndarray, source: np.ndarray, c
     kept[tris[kept_corner]] = True
     new = ~kept
     if not new.any():
-        return
+        return new
     # A channel equal at the source triangle's three corners is that value exactly (the
     # barycentric sum of three equal values can miss it by an ulp).
     same = (source[:, 0] == source[:, 1]) & (source[:, 1] == source[:, 2])  # (T, P)
@@ -171,6 +189,7 @@ def _fix_new_vertices(props: np.ndarray, tris: np.ndarray, source: np.ndarray, c
     if colors:
         block = slice(_FIXED, _FIXED + 3)
         props[new, block] = np.clip(props[new, block], 0.0, 1.0)
+    return new
 
 
 def _surface_mesh(name: str, props: np.ndarray, tris: np.ndarray, colors: bool,
