@@ -60,17 +60,25 @@ def repair(reference: np.ndarray, step: float, faces: np.ndarray, topology: np.n
     topology = np.array(topology, dtype=np.int64)
     among = None
     for _ in range(rounds):
-        flagged = _flagged(positions, faces, among)
+        flagged = _flagged(positions, faces, topology, among)
         if not len(flagged):
             return positions, faces, 0
         faces, among = _fix(positions, faces, topology, reference, flagged, removable)
-    return positions, faces, len(_flagged(positions, faces, among))
+    return positions, faces, len(_flagged(positions, faces, topology, among))
 
 
-def _flagged(positions: np.ndarray, faces: np.ndarray, among: np.ndarray | None) -> np.ndarray:
-    welded = weld_by_position(positions)[faces]
+def _flagged(positions: np.ndarray, faces: np.ndarray, topology: np.ndarray, among: np.ndarray | None) -> np.ndarray:
+    """Faces with zero area, faces that cross another, and faces at a grid point that two
+    vertices of the surface not joined by an edge both reached (a reader that merges equal
+    positions, as MeshLab does, would see the surface pinched there)."""
+    place = weld_by_position(positions)
+    welded = place[faces]
     pairs = self_intersections(positions, faces, among)
-    return np.unique(np.r_[degenerate_faces(positions, welded), pairs.ravel()]).astype(np.int64)
+    corners = np.unique(np.stack([welded.ravel(), topology[faces].ravel()], axis=1), axis=0)
+    shared_place = corners[:, 0][np.r_[corners[1:, 0] == corners[:-1, 0], False]
+                                 | np.r_[False, corners[1:, 0] == corners[:-1, 0]]]
+    pinched = np.flatnonzero(np.isin(welded, shared_place).any(axis=1))
+    return np.unique(np.r_[degenerate_faces(positions, welded), pairs.ravel(), pinched]).astype(np.int64)
 
 
 def _fix(positions, faces, topology, reference, flagged, removable) -> tuple[np.ndarray, np.ndarray]:
@@ -78,7 +86,10 @@ def _fix(positions, faces, topology, reference, flagged, removable) -> tuple[np.
     operation of this round touched. Returns the new faces and which of them to check again
     (positions and topology change in place)."""
     surface = _Surface(positions, faces, topology, reference)
-    for f in flagged:
+    # slivers first: a fat triangle that crosses another is usually pushed there by one
+    tri = positions[faces[flagged]]
+    shortest = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).min(axis=1)
+    for f in flagged[np.argsort(shortest, kind="stable")]:
         if surface.alive[f] and not surface.touched(f):
             (surface.collapse_shortest(f, removable) or surface.flip_longest(f)
              or surface.collapse_nearby(f, removable))
