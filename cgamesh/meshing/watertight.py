@@ -6,15 +6,21 @@ consistently) and carries per-vertex properties through: every vertex channel of
 (normal, UV, colour, attributes) travels as a property column beside the position.
 
 What the output's vertices hold:
-- a vertex of a piece that survives the union (away from the cut lines) keeps all its values
-  exactly: manifold3d copies a retained vertex's properties (its barycentric weight is exactly
-  1), and properties are float64 end to end (``Mesh64``);
+- a vertex of a piece that survives the union (away from the cut lines) keeps its normal, UV,
+  colour and attributes exactly: manifold3d copies a retained vertex's properties (its
+  barycentric weight is exactly 1), and properties are float64 end to end (``Mesh64``);
 - a vertex made on a cut line exists once per side of the cut (the pieces' normals differ
   there: the union has a crease), and on each side takes the values of the piece it lies on,
   interpolated barycentrically inside that piece's triangle (the value a renderer would have
   interpolated there, so shading does not change along the piece); normals are then
   renormalised, colours clamped to [0, 1], and a channel that is the same at the triangle's
-  three corners (a tube's segment id, a cap's normal) is set to exactly that value.
+  three corners (a tube's segment id, a cap's normal) is set to exactly that value;
+- every position is then rounded to the grid that float32 files store exactly (two float32
+  steps at the largest coordinate), and the triangles that rounding leaves crossing another,
+  flat, or pinched at a shared grid point are repaired by local edge collapses and flips
+  (``cgamesh.meshing.float32_grid``, checked exactly by ``cgamesh.meshing.self_intersections``):
+  a collapse removes a cut-line vertex before a piece's, so the analytic values stay where
+  they were.
 
 Tangents are dropped (exporters derive them from the UVs when asked). The pieces must be
 closed and consistently oriented after welding their repeated vertices (``SurfaceMesh.weld``,
