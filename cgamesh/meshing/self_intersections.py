@@ -271,7 +271,7 @@ def _classify(points, faces, pairs) -> np.ndarray:
         rb = fb[k][np.arange(len(k))[:, None], (ib[:, None] + np.arange(3)) % 3]
         A, B = points[ra], points[rb]
         result[k] = _segment_meets_triangle(A[:, 1], A[:, 2], B) | _segment_meets_triangle(B[:, 1], B[:, 2], A)
-    proper = (same.any(axis=2).sum(axis=1) == 2) & (same.any(axis=1).sum(axis=0 if False else 1) == 2)
+    proper = (same.any(axis=2).sum(axis=1) == 2) & (same.any(axis=1).sum(axis=1) == 2)
     k = np.flatnonzero((shared == 2) & proper)  # (a face with a repeated corner is degenerate_faces')
     if len(k):
         # Common edge uv: folded flat when both opposite corners lie in one plane with it, on
