@@ -90,7 +90,9 @@ def test_glb_is_valid_and_round_trips_through_pygltflib(tmp_path, gltf_validate,
 
         expected = expected_positions(mesh, up, scale)
         size = np.ptp(expected, axis=0).max()
-        got = positions.astype(np.float64) + node.translation
+        # in the scene's units relative to the translation, the unit in metres as uniform scale
+        assert node.scale == (None if scale == 1.0 else [scale] * 3)
+        got = positions.astype(np.float64) * scale + node.translation
         np.testing.assert_allclose(got, expected, rtol=0, atol=1e-6 * size)
         acc = gltf.accessors[prim.attributes.POSITION]
         assert acc.min == positions.min(axis=0).tolist() and acc.max == positions.max(axis=0).tolist()
@@ -142,7 +144,7 @@ def test_far_from_origin_keeps_float32_precision(tmp_path, gltf_validate):
 def _pygltflib_world_positions(path):
     gltf = pygltflib.GLTF2().load(str(path))
     positions = read_accessor(gltf, gltf.binary_blob(), gltf.meshes[0].primitives[0].attributes.POSITION)
-    return positions.astype(np.float64) + gltf.nodes[0].translation
+    return positions.astype(np.float64) * (gltf.nodes[0].scale or [1.0])[0] + gltf.nodes[0].translation
 
 
 def _trimesh_world_positions(path):

@@ -17,6 +17,7 @@ from exact_intersections import confirmed_intersections
 manifold3d = pytest.importorskip("manifold3d", reason="SKIPPED, NOT CHECKED: manifold3d (cgamesh[neuro]) is not installed")
 pymeshlab = pytest.importorskip("pymeshlab", reason="SKIPPED, NOT CHECKED: pymeshlab is not installed")
 
+from cgamesh.meshing.float32_grid import grid_step, on_grid  # noqa: E402
 from cgamesh.meshing.watertight import union  # noqa: E402
 
 
@@ -120,10 +121,12 @@ def test_union_of_a_branch_point_and_a_soma_is_watertight_manifold_and_free_of_s
 
 
 def test_vertices_away_from_the_cuts_keep_every_value_exactly():
-    """Every vertex of a piece outside all the other pieces is in the union with its position,
-    normal, UV, colour and attributes bit for bit, and every other output vertex is new."""
+    """Every vertex of a piece outside all the other pieces is in the union with its normal, UV,
+    colour and attributes bit for bit and its position rounded to the union's float32 grid, and
+    every other output vertex is new."""
     pieces = neuron_pieces()
     result = union(pieces, "neuron")
+    step = grid_step(result.positions)
     output = {r.tobytes() for r in _rows(result)}
     kept_count = 0
     for k, piece in enumerate(pieces):
@@ -132,13 +135,13 @@ def test_vertices_away_from_the_cuts_keep_every_value_exactly():
             if j != k:
                 covered |= inside_solid(piece.positions, kind, args)
         away = ~covered
-        missing = [i for i, r in enumerate(_rows(piece)) if away[i] and r.tobytes() not in output]
+        missing = [i for i, r in enumerate(_rows(piece, step)) if away[i] and r.tobytes() not in output]
         assert missing == [], (piece.name, missing[:5])
         kept_count += away.sum()
     assert kept_count > 0.5 * sum(p.vertex_count for p in pieces)
-    source_positions = {p.tobytes() for piece in pieces for p in piece.positions}
+    source_positions = {p.tobytes() for piece in pieces for p in on_grid(piece.positions, step)}
     at_source_position = np.array([p.tobytes() in source_positions for p in result.positions])
-    source_rows = {r.tobytes() for piece in pieces for r in _rows(piece)}
+    source_rows = {r.tobytes() for piece in pieces for r in _rows(piece, step)}
     kept = np.array([r.tobytes() in source_rows for r in _rows(result)])
     np.testing.assert_array_equal(kept, at_source_position)  # a kept position keeps every value
 
@@ -146,7 +149,8 @@ def test_vertices_away_from_the_cuts_keep_every_value_exactly():
 def test_new_vertices_on_the_cut_lines_have_sensible_values():
     pieces = neuron_pieces()
     result = union(pieces, "neuron")
-    positions = {p.tobytes() for piece in pieces for p in piece.positions}
+    step = grid_step(result.positions)
+    positions = {p.tobytes() for piece in pieces for p in on_grid(piece.positions, step)}
     new = np.array([p.tobytes() not in positions for p in result.positions])
     assert new.sum() > 50
     np.testing.assert_allclose(np.linalg.norm(result.normals[new], axis=1), 1.0, atol=1e-12)
@@ -176,7 +180,8 @@ def test_a_single_closed_piece_comes_back_unchanged_and_channels_must_agree():
     ball = with_channels(sphere("ball", (1.0, 2.0, 3.0), 0.7), 0)
     result = union([ball], "ball")
     assert result.triangle_count == ball.triangle_count
-    assert {r.tobytes() for r in _rows(result)} == {r.tobytes() for r in _rows(ball)}
+    step = grid_step(result.positions)  # positions on the float32 grid, all else bit for bit
+    assert {r.tobytes() for r in _rows(result)} == {r.tobytes() for r in _rows(ball, step)}
     bare = sphere("bare", (0.0, 0.0, 0.0), 1.0)
     with pytest.raises(InvalidInputError, match="piece 1 .*'bare'.*same channels"):
         union([ball, bare], "mixed")
@@ -202,8 +207,9 @@ def _kept(pieces, result) -> np.ndarray:
     return np.array([p.tobytes() in positions for p in result.positions])
 
 
-def _rows(mesh: SurfaceMesh) -> np.ndarray:
-    columns = [mesh.positions, mesh.normals, mesh.uvs]
+def _rows(mesh: SurfaceMesh, step: float | None = None) -> np.ndarray:
+    """Each vertex's values in one row; with ``step``, its position rounded to that grid."""
+    columns = [mesh.positions if step is None else on_grid(mesh.positions, step), mesh.normals, mesh.uvs]
     if mesh.colors is not None:
         columns.append(mesh.colors)
     columns += [mesh.attributes[n][:, None] for n in sorted(mesh.attributes or {})]

@@ -4,10 +4,11 @@ glTF's own vocabulary stays inside this file. Every surface becomes one mesh and
 that name in the one default scene, with one metallic-roughness material of that name. The
 conventions are the scene format's: glTF is +Y up and in metres, so a file with ``up: z`` maps
 (x, y, z) to (x, z, -y) and every length is multiplied by ``meters_per_unit``;
-``asset.extras`` records the source units and up axis. Positions are stored as float32
-relative to the node's translation (the float64 centre of the surface's bounding box), which
-keeps float32's 24 bits of precision for the surface's size rather than for its distance from
-the origin.
+``asset.extras`` records the source units and up axis. Positions are stored as float32 in the
+scene's units relative to the node's translation (the float64 centre of the surface's bounding
+box, in metres), with the unit's length in metres as the node's uniform scale: float32's 24 bits
+of precision go to the surface's size rather than to its distance from the origin, and a
+position that is a float32 number relative to the centre is stored exactly.
 
 Options:
 - ``tangents``: a TANGENT attribute (VEC4, w = +-1) so normal maps work: the mesher's analytic
@@ -229,8 +230,8 @@ class _Layout:
 def _fill_mesh(doc, blob, offset, mesh, layout, up, scale, path) -> g.Node:
     """Compute one mesh's attributes into ``blob`` from ``offset``; add bufferViews, accessors.
 
-    Returns its node: translation (bounding-box centre in glTF metres, float64) and, when
-    quantized, the dequantising uniform scale.
+    Returns its node: translation (bounding-box centre in glTF metres, float64) and a uniform
+    scale: when quantized the dequantising one, else the unit's length in metres (omitted when 1).
     """
     where = f"cannot export {path}: surface {mesh.name!r}"
     src, sign = _AXIS_MAPS[up]
@@ -275,7 +276,12 @@ def _fill_mesh(doc, blob, offset, mesh, layout, up, scale, path) -> g.Node:
         _map_axes(out("POSITION"), positions, perm, factor * (32767.0 / half), shift=centre, rounding=True)
         node.scale = [half, half, half]
     else:
-        _map_axes(out("POSITION"), positions, perm, factor, shift=centre)
+        # Lengths in the scene's units, the unit's length in metres as the node's uniform scale:
+        # float32 then stores (position - centre) itself, exactly whenever that is a float32
+        # number (as on the watertight union's float32 grid), not a rounding of it times 1e-6.
+        _map_axes(out("POSITION"), positions, perm, np.asarray(sign, dtype=np.float64), shift=centre)
+        if scale != 1.0:
+            node.scale = [scale, scale, scale]
     stored = out("POSITION")
     pos_min, pos_max = column_bounds(stored)  # from the exact values stored
     if not (np.isfinite(pos_min).all() and np.isfinite(pos_max).all()):

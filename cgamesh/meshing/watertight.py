@@ -6,15 +6,21 @@ consistently) and carries per-vertex properties through: every vertex channel of
 (normal, UV, colour, attributes) travels as a property column beside the position.
 
 What the output's vertices hold:
-- a vertex of a piece that survives the union (away from the cut lines) keeps all its values
-  exactly: manifold3d copies a retained vertex's properties (its barycentric weight is exactly
-  1), and properties are float64 end to end (``Mesh64``);
+- a vertex of a piece that survives the union (away from the cut lines) keeps its normal, UV,
+  colour and attributes exactly: manifold3d copies a retained vertex's properties (its
+  barycentric weight is exactly 1), and properties are float64 end to end (``Mesh64``);
 - a vertex made on a cut line exists once per side of the cut (the pieces' normals differ
   there: the union has a crease), and on each side takes the values of the piece it lies on,
   interpolated barycentrically inside that piece's triangle (the value a renderer would have
   interpolated there, so shading does not change along the piece); normals are then
   renormalised, colours clamped to [0, 1], and a channel that is the same at the triangle's
-  three corners (a tube's segment id, a cap's normal) is set to exactly that value.
+  three corners (a tube's segment id, a cap's normal) is set to exactly that value;
+- every position is then rounded to the grid that float32 files store exactly (two float32
+  steps at the largest coordinate), and the triangles that rounding leaves crossing another,
+  flat, or pinched at a shared grid point are repaired by local edge collapses and flips
+  (``cgamesh.meshing.float32_grid``, checked exactly by ``cgamesh.meshing.self_intersections``):
+  a collapse removes a cut-line vertex before a piece's, so the analytic values stay where
+  they were.
 
 Tangents are dropped (exporters derive them from the UVs when asked). The pieces must be
 closed and consistently oriented after welding their repeated vertices (``SurfaceMesh.weld``,
@@ -72,8 +78,25 @@ def union(pieces: Sequence[SurfaceMesh], name: str) -> SurfaceMesh:
     props = np.array(out.vert_properties, dtype=np.float64)  # a copy we may write to
     tris = np.asarray(out.tri_verts, dtype=np.int64)
     source = _source_corners(out, tris, piece_of_id, rows, faces)
-    _fix_new_vertices(props, tris, source, colors, name)
+    new = _fix_new_vertices(props, tris, source, colors, name)
+    props, tris = _on_float32_grid(props, tris, new, name)
     return _surface_mesh(name, props, tris, colors, attribute_names)
+
+
+def _on_float32_grid(props: np.ndarray, tris: np.ndarray, new: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """Positions rounded to the grid every float32 writer stores exactly, the triangles that
+    rounding left crossing or flat repaired (``cgamesh.meshing.float32_grid``; the few it cannot
+    yet repair are left as they are), unused vertices dropped."""
+    from cgamesh.meshing.float32_grid import grid_step, repair
+
+    step = grid_step(props[:, _POSITION])
+    topology = weld_by_position(props[:, _POSITION])  # before rounding: the union's own vertices
+    positions, tris, _ = repair(props[:, _POSITION], step, tris, topology, new)
+    props[:, _POSITION] = positions
+    used = np.zeros(len(props), dtype=bool)
+    used[tris.ravel()] = True
+    index = np.cumsum(used) - 1
+    return props[used], index[tris]
 
 
 def _float32_tolerance(rows: list[np.ndarray]) -> float:
@@ -141,9 +164,10 @@ def _source_corners(out, tris: np.ndarray, piece_of_id: dict[int, int], rows: li
     return all_rows[all_faces[face]]
 
 
-def _fix_new_vertices(props: np.ndarray, tris: np.ndarray, source: np.ndarray, colors: bool, name: str) -> None:
+def _fix_new_vertices(props: np.ndarray, tris: np.ndarray, source: np.ndarray, colors: bool, name: str) -> np.ndarray:
     """Give vertices made by the union (on cut lines) their final values, in place; vertices
-    whose row is one of their source triangle's corners are left exactly as they are."""
+    whose row is one of their source triangle's corners are left exactly as they are. Returns
+    (V,) whether each vertex is new."""
     corners = props[tris]  # (T, 3, P)
     kept_corner = np.zeros(tris.shape, dtype=bool)
     for j in range(3):
@@ -152,7 +176,7 @@ def _fix_new_vertices(props: np.ndarray, tris: np.ndarray, source: np.ndarray, c
     kept[tris[kept_corner]] = True
     new = ~kept
     if not new.any():
-        return
+        return new
     # A channel equal at the source triangle's three corners is that value exactly (the
     # barycentric sum of three equal values can miss it by an ulp).
     same = (source[:, 0] == source[:, 1]) & (source[:, 1] == source[:, 2])  # (T, P)
@@ -171,6 +195,7 @@ def _fix_new_vertices(props: np.ndarray, tris: np.ndarray, source: np.ndarray, c
     if colors:
         block = slice(_FIXED, _FIXED + 3)
         props[new, block] = np.clip(props[new, block], 0.0, 1.0)
+    return new
 
 
 def _surface_mesh(name: str, props: np.ndarray, tris: np.ndarray, colors: bool,
