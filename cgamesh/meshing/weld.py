@@ -4,11 +4,61 @@ from __future__ import annotations
 
 import numpy as np
 
+# Odd 64-bit multipliers mixing the three coordinates' bit patterns into one hash (any odd
+# constants do: equal positions always share a hash, and runs of equal hashes are verified).
+_MIX = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xC2B2AE3D27D4EB4F), np.uint64(0x165667B19E3779F9))
+
 
 def weld_by_position(positions: np.ndarray) -> np.ndarray:
-    """(V,) index of the first vertex at each bit-identical position (positions (V, 3))."""
-    rows = np.ascontiguousarray(positions, dtype=np.float64)
-    rows = rows + 0.0  # -0.0 and 0.0 are the same place
-    keys = rows.view(np.dtype((np.void, rows.dtype.itemsize * 3))).ravel()
-    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-    return first[inverse.ravel()]
+    """(V,) index of the first vertex at each bit-identical position (positions (V, 3)).
+
+    One 64-bit hash per vertex of its coordinates' bit patterns, sorted with the vertex index in
+    its low bits (so a run of equal hashes lists its vertices in index order); a run whose rows all equal its first row welds to it, and the few runs that do
+    not (hash collisions) are resolved by an exact sort of their rows alone. One sort of 64-bit
+    integers instead of 24-byte rows: several times faster on a tractogram's millions of
+    vertices, with the same answer.
+    """
+    positions = np.asarray(positions, dtype=np.float64)
+    count = positions.shape[0]
+    weld = np.arange(count)
+    if count < 2:
+        return weld
+    hashed = np.zeros(count, dtype=np.uint64)
+    column = np.empty(count)
+    with np.errstate(over="ignore"):
+        for axis, mix in enumerate(_MIX):
+            np.add(positions[:, axis], 0.0, out=column)  # -0.0 and 0.0 are the same place
+            hashed ^= column.view(np.uint64) * mix
+            hashed = (hashed << np.uint64(29)) | (hashed >> np.uint64(35))
+    # the vertex index in the low bits: one plain sort of integers orders by hash, then by index
+    bits = max(int(count - 1).bit_length(), 1)
+    low = np.uint64((1 << bits) - 1)
+    hashed &= ~low
+    hashed |= np.arange(count, dtype=np.uint64)
+    hashed.sort()
+    order = (hashed & low).astype(np.int64)
+    sorted_hash = hashed >> np.uint64(bits)
+    del hashed
+    repeat = np.flatnonzero(sorted_hash[1:] == sorted_hash[:-1]) + 1  # sorted slots equal to the slot before
+    if not repeat.size:
+        return weld
+    # the first slot of each run of equal hashes, for every repeated slot
+    starts = np.ones(count, dtype=bool)
+    starts[repeat] = False
+    run_start = np.maximum.accumulate(np.where(starts, np.arange(count), 0))[repeat]
+    members, heads = order[repeat], order[run_start]
+    same = np.all(_bits(positions[members]) == _bits(positions[heads]), axis=1)
+    weld[members[same]] = heads[same]
+    if not same.all():  # a collision: an exact weld over every vertex of the colliding runs
+        runs = np.unique(run_start[~same])
+        in_run = np.isin(run_start, runs)
+        rows = np.unique(np.concatenate([order[runs], members[in_run]]))
+        keys = np.ascontiguousarray(_bits(positions[rows])).view(np.dtype((np.void, 24))).ravel()
+        _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+        weld[rows] = rows[first[inverse.ravel()]]
+    return weld
+
+
+def _bits(rows: np.ndarray) -> np.ndarray:
+    """The coordinates' bit patterns with -0.0 as 0.0, for exact comparison."""
+    return (rows + 0.0).view(np.uint64)
