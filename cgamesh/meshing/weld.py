@@ -23,29 +23,36 @@ def weld_by_position(positions: np.ndarray) -> np.ndarray:
     weld = np.arange(count)
     if count < 2:
         return weld
+    # in place through two scratch columns: the weld of a tractogram's millions of vertices
+    # costs about 5 arrays of V integers beyond its input, not 15
     hashed = np.zeros(count, dtype=np.uint64)
+    scratch = np.empty(count, dtype=np.uint64)
     column = np.empty(count)
     with np.errstate(over="ignore"):
         for axis, mix in enumerate(_MIX):
             np.add(positions[:, axis], 0.0, out=column)  # -0.0 and 0.0 are the same place
-            hashed ^= column.view(np.uint64) * mix
-            hashed = (hashed << np.uint64(29)) | (hashed >> np.uint64(35))
+            np.multiply(column.view(np.uint64), mix, out=scratch)
+            hashed ^= scratch
+            np.right_shift(hashed, np.uint64(35), out=scratch)
+            np.left_shift(hashed, np.uint64(29), out=hashed)
+            hashed |= scratch
+    del column
     # the vertex index in the low bits: one plain sort of integers orders by hash, then by index
     bits = max(int(count - 1).bit_length(), 1)
     low = np.uint64((1 << bits) - 1)
     hashed &= ~low
     hashed |= np.arange(count, dtype=np.uint64)
     hashed.sort()
-    order = (hashed & low).astype(np.int64)
-    sorted_hash = hashed >> np.uint64(bits)
-    del hashed
+    order = np.bitwise_and(hashed, low, out=scratch).view(np.int64)
+    sorted_hash = np.right_shift(hashed, np.uint64(bits), out=hashed)
     repeat = np.flatnonzero(sorted_hash[1:] == sorted_hash[:-1]) + 1  # sorted slots equal to the slot before
+    del sorted_hash, hashed
     if not repeat.size:
         return weld
     # the first slot of each run of equal hashes, for every repeated slot
-    starts = np.ones(count, dtype=bool)
-    starts[repeat] = False
-    run_start = np.maximum.accumulate(np.where(starts, np.arange(count), 0))[repeat]
+    opens = np.ones(repeat.size, dtype=bool)
+    opens[1:] = repeat[1:] != repeat[:-1] + 1
+    run_start = np.maximum.accumulate(np.where(opens, repeat - 1, 0))
     members, heads = order[repeat], order[run_start]
     same = np.all(_bits(positions[members]) == _bits(positions[heads]), axis=1)
     weld[members[same]] = heads[same]
