@@ -9,6 +9,9 @@ import numpy as np
 _MIX = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xC2B2AE3D27D4EB4F), np.uint64(0x165667B19E3779F9))
 
 
+_BLOCK = 1 << 18  # repeated vertices checked at a time
+
+
 def weld_by_position(positions: np.ndarray) -> np.ndarray:
     """(V,) index of the first vertex at each bit-identical position (positions (V, 3)).
 
@@ -53,13 +56,18 @@ def weld_by_position(positions: np.ndarray) -> np.ndarray:
     opens = np.ones(repeat.size, dtype=bool)
     opens[1:] = repeat[1:] != repeat[:-1] + 1
     run_start = np.maximum.accumulate(np.where(opens, repeat - 1, 0))
-    members, heads = order[repeat], order[run_start]
-    same = np.all(_bits(positions[members]) == _bits(positions[heads]), axis=1)
-    weld[members[same]] = heads[same]
-    if not same.all():  # a collision: an exact weld over every vertex of the colliding runs
-        runs = np.unique(run_start[~same])
+    colliding = []
+    for block in range(0, repeat.size, _BLOCK):  # rows compared a block at a time (an input of
+        # many coincident copies repeats nearly every vertex)
+        starts = run_start[block:block + _BLOCK]
+        members, heads = order[repeat[block:block + _BLOCK]], order[starts]
+        same = np.all(_bits(positions[members]) == _bits(positions[heads]), axis=1)
+        weld[members[same]] = heads[same]
+        colliding.append(np.unique(starts[~same]))
+    runs = np.unique(np.concatenate(colliding))
+    if runs.size:  # a collision: an exact weld over every vertex of the colliding runs
         in_run = np.isin(run_start, runs)
-        rows = np.unique(np.concatenate([order[runs], members[in_run]]))
+        rows = np.unique(np.concatenate([order[runs], order[repeat[in_run]]]))
         keys = np.ascontiguousarray(_bits(positions[rows])).view(np.dtype((np.void, 24))).ravel()
         _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
         weld[rows] = rows[first[inverse.ravel()]]
