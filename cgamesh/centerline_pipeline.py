@@ -25,7 +25,6 @@ import numpy as np
 
 from cgamesh.errors import CgameshError, DegenerateGeometryError, InvalidInputError
 from cgamesh.inputs.centerlines import Centerlines
-from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
 
@@ -235,6 +234,7 @@ def _chains(lines: Centerlines) -> tuple[list[_Chain], np.ndarray]:
 def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segment_of, lines: Centerlines,
           options: TubeOptions, stem: str) -> SurfaceMesh | None:
     """The tube of one chain with its attributes; None for a chain inside the soma alone."""
+    from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
     from cgamesh.pipeline import Resolution, mesh_surface
 
     nodes = chain.nodes
