@@ -95,6 +95,15 @@ def _sparse_steps(kind: str, grades_a: tuple, grades_b: tuple, grades_out: tuple
     return tuple(steps)
 
 
+def _single_blade_terms(steps):
+    """The steps of a product with a one-blade operand as one gather: (a's rows, result rows,
+    signs (n, 1)); each result blade has one term, so the rows never collide."""
+    i = np.array([step[0] for step in steps])
+    ks = np.concatenate([step[2] for step in steps])
+    signs = np.concatenate([step[3] for step in steps])
+    return i, ks, signs
+
+
 def _product(kind, a, b, grades_a, grades_b, grades_out):
     selections = _selection(grades_a), _selection(grades_b), _selection(grades_out)
     blades_a, blades_b, blades_out, matrix = _bilinear_map(kind, *selections)
@@ -110,7 +119,10 @@ def _product(kind, a, b, grades_a, grades_b, grades_out):
         left = np.broadcast_to(a[..., blades_a], shape + (blades_a.size,)).reshape(rows, -1).T
         right = np.broadcast_to(b[..., blades_b], shape + (blades_b.size,)).reshape(rows, -1).T
         result = np.zeros((blades_out.size, rows))
-        for i, js, ks, signs in steps:
+        if blades_b.size == 1:  # a times one blade (a dual): each result blade takes one term
+            i, ks, signs = _single_blade_terms(steps)
+            result[ks] += left[i] * (right[0] * signs)
+        for i, js, ks, signs in steps if blades_b.size > 1 else ():
             result[ks] += left[i] * (right[js] * signs)
         out[..., blades_out] = result.T.reshape(shape + (blades_out.size,))
     elif blades_out.size:
