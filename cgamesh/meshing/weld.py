@@ -61,7 +61,9 @@ def weld_by_position(positions: np.ndarray) -> np.ndarray:
         # many coincident copies repeats nearly every vertex)
         starts = run_start[block:block + _BLOCK]
         members, heads = order[repeat[block:block + _BLOCK]], order[starts]
-        same = np.all(_bits(positions[members]) == _bits(positions[heads]), axis=1)
+        # equal as numbers (so -0.0 is 0.0); a NaN never is, and its run is settled exactly below
+        equal = np.take(positions, members, axis=0) == np.take(positions, heads, axis=0)
+        same = equal[:, 0] & equal[:, 1] & equal[:, 2]
         weld[members[same]] = heads[same]
         colliding.append(np.unique(starts[~same]))
     runs = np.unique(np.concatenate(colliding))
