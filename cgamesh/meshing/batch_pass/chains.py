@@ -16,6 +16,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from cgamesh.budget import BATCHED_CHUNK_RINGS
 from cgamesh.errors import CgameshError
 from cgamesh.meshing.batch_pass.motions import ChainMotions, ChainNodes
 from cgamesh.meshing.batch_pass.rings import TubeArrays, mesh_chains
@@ -23,8 +24,9 @@ from cgamesh.meshing.circles import _grid_weld  # the per-chain mesher's seam we
 from cgamesh.meshing.mesh import SurfaceMesh
 
 # Rings meshed per chunk: the circle blades and their products (about 3 kB per ring) stay
-# within a core's cache (measured: 2,048 rings ~25% faster than 16,384 on the fornix).
-CHUNK_RINGS = 2048
+# within a core's cache (measured: 2,048 rings ~25% faster than 16,384 on the fornix); the
+# memory budget prices a batched run by it.
+CHUNK_RINGS = BATCHED_CHUNK_RINGS
 SOMA_SEGMENT = -1.0
 
 
