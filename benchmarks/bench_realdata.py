@@ -7,7 +7,7 @@ navis' neurons, at 8 vertices around and 3 extra rings between nodes. pyvista's 
 ``Spline`` (the same rings per node) + ``tube``, and its plain polyline ``tube`` at one ring
 per node; both read the same chains (cgamesh's reader) and write a GLB with trimesh. Printed:
 time ratios, the per-surface overhead of the batched pass, and peak memory against the bytes
-of the mesh arrays written. Results are checked (vertex counts, finite arrays); times are
+of the mesh arrays written (whole process, and above a bare python + numpy process's peak). Results are checked (vertex counts, finite arrays); times are
 printed, never asserted. The big-tube figures: ``python benchmarks/bench_tubes.py``.
 
     python benchmarks/bench_realdata.py [--repeat 3] [--copies 10] [--neurons 3] [--blas-threads N] [--tiny]
@@ -102,6 +102,18 @@ def run_child(code: str, args: list[str]) -> tuple[float, float, float]:
     return seconds, usage.ru_utime + usage.ru_stime, peak[-1] / 1024.0
 
 
+BASELINE_CHILD = PEAK + """
+import numpy
+print('PEAK_KB', peak_kb())
+"""
+
+
+def baseline_memory() -> float:
+    """Peak resident MB of a bare python process that imports numpy: the floor under every
+    child's peak, whatever it meshes."""
+    return run_child(BASELINE_CHILD, [])[2]
+
+
 def glb_vertices(path: Path) -> int:
     """Vertex count of a GLB from its JSON chunk alone (the parent stays small: a child's
     rusage would otherwise include the pages of the parent it was forked from)."""
@@ -130,7 +142,7 @@ def repeated_tractogram(source: Path, copies: int, folder: Path) -> Path:
     return path
 
 
-def case(name: str, path: Path, radius: float, repeat: int, folder: Path) -> dict:
+def case(name: str, path: Path, radius: float, repeat: int, folder: Path, baseline: float) -> dict:
     """Interleaved runs of cgamesh, pyvista Spline+tube and pyvista tube; best wall and CPU times."""
     wall = {"cgamesh": np.inf, "spline": np.inf, "tube": np.inf}
     cpu = dict(wall)
@@ -157,15 +169,19 @@ def case(name: str, path: Path, radius: float, repeat: int, folder: Path) -> dic
           f"({cpu['cgamesh'] / cpu['spline']:.2f}x), plain tube {cpu['tube']:.2f} s "
           f"({cpu['cgamesh'] / cpu['tube']:.2f}x)")
     print(f"{'':>14}  peak memory cgamesh {memory['cgamesh']:.0f} MB for {written:.1f} MB written "
-          f"({memory['cgamesh'] / written:.1f}x, target <= 3x); pyvista Spline+tube {memory['spline']:.0f} MB")
+          f"({memory['cgamesh'] / written:.1f}x, target <= 3x; {(memory['cgamesh'] - baseline) / written:.1f}x "
+          f"above the {baseline:.0f} MB of a bare python + numpy, which is {baseline / memory['cgamesh']:.0%} of "
+          f"the peak); pyvista Spline+tube {memory['spline']:.0f} MB")
     return wall
 
 
 def per_surface_overhead(counts: list[int]) -> None:
-    """Time of N tiny tubes (2 nodes each) through the batched pass, over N."""
+    """Time of N tiny tubes (2 nodes each) through the batched pass, over N, in this process
+    after one warm-up call (the one-off imports and cached product tables are not per surface)."""
     from cgamesh.api import tubes
 
     rng = np.random.default_rng(1)
+    tubes([rng.normal(size=(2, 3))], radii=0.5, units="mm")
     for n in counts:
         polylines = [rng.normal(size=(2, 3)) * 10.0 for _ in range(n)]
         start = time.perf_counter()
@@ -192,11 +208,13 @@ def main(argv: list[str] | None = None) -> None:
     repeat = 1 if args.tiny else args.repeat
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        case("fornix", fornix(), 0.5, repeat, folder)
+        baseline = baseline_memory()
+        case("fornix", fornix(), 0.5, repeat, folder, baseline)
         if args.copies > 1:
-            case(f"fornix x{args.copies}", repeated_tractogram(fornix(), args.copies, folder), 0.5, repeat, folder)
+            case(f"fornix x{args.copies}", repeated_tractogram(fornix(), args.copies, folder), 0.5, repeat, folder,
+                 baseline)
         for path in sorted(neurons(), key=lambda p: p.stat().st_size)[: args.neurons]:
-            case(path.stem, path, 40.0, repeat, folder)
+            case(path.stem, path, 40.0, repeat, folder, baseline)
     per_surface_overhead([10, 100] if args.tiny else [100, 1000, 10000])
     print("big-tube figures: python benchmarks/bench_tubes.py")
 

@@ -43,7 +43,8 @@ MESHING_PER_VERTEX = {"circles": 500, "point_pairs": 900}
 MESHING_PER_RING = {"circles": 4096, "point_pairs": 8192}
 # Bytes per vertex each output format allocates while it is written (its own arrays and the
 # file's bytes), beyond the meshes; measured per format as above.
-EXPORT_PER_VERTEX = {".glb": 200, ".gltf": 200, ".usda": 400, ".usdc": 250, ".usd": 250, ".usdz": 250,
+# glTF streams its binary chunk in blocks: the normals' lengths (8 bytes) and slack.
+EXPORT_PER_VERTEX = {".glb": 64, ".gltf": 64, ".usda": 400, ".usdc": 250, ".usd": 250, ".usdz": 250,
                      ".obj": 1600, ".ply": 700, ".stl": 1200}
 TANGENTS_PER_VERTEX = 200  # analytic tangents while meshing, TANGENT while writing
 
@@ -178,13 +179,30 @@ def export_bytes(suffixes, vertices: int, tangents: bool = False) -> int:
     return (per_vertex + (TANGENTS_PER_VERTEX if tangents else 0)) * vertices
 
 
+# The batched pass of centreline inputs meshes chunks of at most this many rings (its
+# CHUNK_RINGS, and one chain longer than that) into the merged mesh, then welds it.
+BATCHED_CHUNK_RINGS = 2048
+WELD_PER_VERTEX = 48
+
+
 def centerline_bytes(points: int, chains: int, around: int, subdivide: int, suffixes=(),
-                     tangents: bool = False) -> tuple[int, int]:
+                     tangents: bool = False, batched: bool = False,
+                     longest_chain: int | None = None) -> tuple[int, int]:
     """(vertices, peak bytes) of tubes along ``chains`` centreline chains of ``points`` nodes in
     all, ``subdivide`` rings between nodes, with a junction sphere per chain at most: an upper
-    estimate made before anything is read into meshes, written to ``suffixes``."""
+    estimate made before anything is read into meshes, written to ``suffixes``.
+
+    ``batched``: the batched pass (cgamesh.meshing.batch_pass) makes the meshes, a chunk at a
+    time into the merged mesh: the merged mesh, the weld's scratch and one chunk's meshing
+    (of at most ``longest_chain`` nodes' rings beyond a chunk), not a whole mesh's meshing peak."""
     rings = points * (subdivide + 1) + chains
     sphere = (around + 1) * (around // 2 + 1)
     vertices = rings * (around + 1) + chains * sphere
-    _, peak = surface_bytes("circles", around, rings + chains * (around // 2 + 1), tangents=tangents)
+    if batched:
+        chunk_rings = min(rings, BATCHED_CHUNK_RINGS + (points if longest_chain is None else longest_chain)
+                          * (subdivide + 1))
+        _, chunk = surface_bytes("circles", around, chunk_rings, tangents=tangents)
+        peak = (HELD_PER_VERTEX + WELD_PER_VERTEX) * vertices + chunk
+    else:
+        _, peak = surface_bytes("circles", around, rings + chains * (around // 2 + 1), tangents=tangents)
     return vertices, peak + export_bytes(suffixes, vertices, tangents)

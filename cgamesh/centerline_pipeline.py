@@ -25,7 +25,6 @@ import numpy as np
 
 from cgamesh.errors import CgameshError, DegenerateGeometryError, InvalidInputError
 from cgamesh.inputs.centerlines import Centerlines
-from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.node_normals import envelope_normals
@@ -114,17 +113,26 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     tangents = np.zeros_like(points)
     tangents[:, 2] = 1.0
     segment_of = np.full(len(points), SOMA_SEGMENT)
-    pieces: list[SurfaceMesh] = []
     skipped: list[str] = []
     stem = _mesh_name(lines.source)
+    merging = not options.split and not options.watertight
+    pieces: list[SurfaceMesh] = []
+    if merging:  # each piece goes into the merged arrays as it is made (cgamesh.meshing.merge)
+        from cgamesh.meshing.merge import MergedMesh
+
+        vertices, triangles = _expected_size(chains, junctions, soma, options)
+        merged = MergedMesh(vertices, triangles)
+        sink = merged.append
+    else:
+        sink = pieces.append
     if batched and uses_batched_pass(options):
         from cgamesh.meshing.batch_pass.chains import tube_pieces
 
         def single(chain, index, tangents_, segment_of_):
             return _tube(chain, index, points, radii, soma, scalar, tangents_, segment_of_, lines, options, stem)
 
-        pieces, skipped = tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, options, stem,
-                                      _label_name, single, progress)
+        skipped = tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, options, stem,
+                              _label_name, single, progress, sink)
         chains_loop = []
     else:
         chains_loop = chains
@@ -136,16 +144,16 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
                 raise
             skipped.append(str(error))
             piece = None
-        if isinstance(piece, list):
-            pieces.extend(piece)
-        elif piece is not None:
-            pieces.append(piece)
+        for one in piece if isinstance(piece, list) else [] if piece is None else [piece]:
+            sink(one)
         progress(chain.label)
     spheres = _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem)
-    if not pieces and not spheres:
+    for sphere in spheres:
+        sink(sphere)
+    if (merged.empty if merging else not pieces):
         raise DegenerateGeometryError(f"{lines.source}: nothing to mesh: "
                                       f"{'; '.join(skipped[:3]) if skipped else 'no chain has two distinct points'}")
-    meshes = _assemble(pieces, spheres, options, stem)
+    meshes = _colored([merged.finish(stem)] if merging else _assemble(pieces, options, stem), options)
     return TubeMeshes(meshes=tuple(meshes), skipped=tuple(skipped), up=up, units=lines.units,
                       meters_per_unit=lines.meters_per_unit, chains=len(chains),
                       material=Material(color=(1.0, 1.0, 1.0)) if options.color_by != "none" else Material())
@@ -227,6 +235,7 @@ def _chains(lines: Centerlines) -> tuple[list[_Chain], np.ndarray]:
 def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segment_of, lines: Centerlines,
           options: TubeOptions, stem: str) -> SurfaceMesh | None:
     """The tube of one chain with its attributes; None for a chain inside the soma alone."""
+    from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
     from cgamesh.pipeline import Resolution, mesh_surface
 
     nodes = chain.nodes
@@ -433,20 +442,36 @@ def _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, optio
     return meshes
 
 
-def _assemble(pieces: list[SurfaceMesh], spheres: list[SurfaceMesh], options: TubeOptions,
-              stem: str) -> list[SurfaceMesh]:
-    every = pieces + spheres
+def _assemble(pieces: list[SurfaceMesh], options: TubeOptions, stem: str) -> list[SurfaceMesh]:
+    """Split (one mesh per piece) or watertight (one union); merged outputs are built as the
+    pieces come (mesh_centerlines)."""
     if options.watertight:
         from cgamesh.meshing.watertight import union
 
-        meshes = [union(every, stem)]
-    elif options.split:
-        meshes = every
-    else:
-        from cgamesh.meshing.merge import merge
+        return [union(pieces, stem)]
+    return pieces
 
-        meshes = [merge(every, stem)]
-    return _colored(meshes, options)
+
+def _expected_size(chains: list[_Chain], junctions: np.ndarray, soma: np.ndarray,
+                   options: TubeOptions) -> tuple[int, int]:
+    """Vertices and triangles of the merged tubes and spheres at a fixed resolution (an upper
+    bound: duplicate points merged, chains skipped or inside the soma have fewer); with a
+    tolerance, a first guess the merged arrays grow from."""
+    from cgamesh.meshing.junctions import uv_spheres
+
+    nodes = np.array([len(c.nodes) for c in chains], dtype=np.int64)
+    along = (np.maximum(nodes, 2) - 1) * (options.subdivide + 1) + 1
+    vertices = int(along.sum()) * (options.around + 1)
+    triangles = int((along - 1).sum()) * 2 * options.around
+    if options.caps:
+        vertices += 2 * len(chains) * (options.around + 1)
+        triangles += 2 * len(chains) * options.around
+    spheres = int(np.count_nonzero(~soma[junctions]) + np.count_nonzero(soma))
+    if spheres:
+        one = uv_spheres(np.zeros((1, 3)), np.ones(1), options.around)
+        vertices += spheres * one.vertex_count
+        triangles += spheres * one.triangle_count
+    return vertices, triangles
 
 
 def _colored(meshes: list[SurfaceMesh], options: TubeOptions) -> list[SurfaceMesh]:

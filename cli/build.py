@@ -61,14 +61,14 @@ def add_meshing_options(parser: argparse.ArgumentParser) -> tuple[str, ...]:
 def run(args: argparse.Namespace) -> str:
     """Build and write every output; returns the summary lines (one per output), or the exit
     status 1 after printing them when --strict finds a quality threshold broken."""
+    if realdata.is_real_data(args.scene):  # before the scene mesher's imports, which it does not need
+        return realdata.run(args)
     from cgamesh.export.atomic import all_or_nothing
     from cgamesh.export.registry import check_distinct, vertices_written, write
     from cgamesh.pipeline import Resolution, mesh_scene
     from cgamesh.progress import Progress
     from cgamesh.inputs.scene import load_scene
 
-    if realdata.is_real_data(args.scene):
-        return realdata.run(args)
     realdata.reject_for_scene(args)
     outputs = [Path(o) for o in args.output]
     for output in outputs:  # refused before any meshing: unknown formats, missing folders

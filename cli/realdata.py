@@ -57,7 +57,9 @@ def reject_for_scene(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> str | int:
     """Read, mesh and write a centreline input; the summary, or EXIT_SKIPPED after printing it."""
-    from cgamesh.centerline_pipeline import TubeOptions, chain_count, mesh_centerlines
+    import numpy as np
+
+    from cgamesh.centerline_pipeline import TubeOptions, chain_count, mesh_centerlines, uses_batched_pass
     from cgamesh.export.registry import write, writer_for
     from cgamesh.inputs.centerlines import read_centerlines
     from cgamesh.progress import Progress
@@ -90,8 +92,11 @@ def run(args: argparse.Namespace) -> str | int:
                           strict=args.strict)
     chains = chain_count(lines)
     if options.tolerance is None:  # the tolerance's own plan prices a tolerance run
+        longest = int(np.diff(lines.offsets).max()) if lines.offsets is not None and len(lines.offsets) > 1 else None
         vertices, peak = centerline_bytes(len(lines.points), chains, options.around, options.subdivide,
-                                          [o.suffix for o in outputs], tangents=args.tangents)
+                                          [o.suffix for o in outputs], tangents=args.tangents,
+                                          batched=uses_batched_pass(options) and not options.split,
+                                          longest_chain=longest)
         Budget.of(args.max_memory).require(peak, args.scene, f"memory for {vertices} vertices of tubes")
     with Progress(chains, enabled=not args.quiet) as progress:
         built = mesh_centerlines(lines, options, progress=progress.advance)

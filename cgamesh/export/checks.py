@@ -27,6 +27,7 @@ ATTRIBUTE_NAME = re.compile(r"[a-z][a-z0-9_]*")
 # Colours a mesh op interpolated may stray from [0, 1] by rounding; more than this is a bug.
 COLOR_RANGE_SLACK = 1e-9
 FLOAT32_MAX = float(np.finfo(np.float32).max)
+LENGTH_BLOCK = 1 << 16  # rows of normals measured at a time
 
 
 def check_arguments(path, surfaces: Sequence, up: str, meters_per_unit: float) -> float:
@@ -90,8 +91,11 @@ def normal_lengths(mesh: SurfaceMesh, path) -> np.ndarray:
     """|normal| (V,), after checking each is within NORMAL_LENGTH_TOLERANCE of 1 (NaN fails too)."""
     normals = np.asarray(mesh.normals, dtype=np.float64)
     # Squares summed by a matrix-vector product: several times faster than einsum's loop
-    # over a last axis of 3.
-    length = np.sqrt(np.square(normals) @ np.ones(3))
+    # over a last axis of 3; a block of rows at a time, so the squares never take 3 arrays of V.
+    length = np.empty(len(normals))
+    for start in range(0, len(normals), LENGTH_BLOCK):
+        rows = slice(start, start + LENGTH_BLOCK)
+        np.sqrt(np.square(normals[rows]) @ np.ones(3), out=length[rows])
     bad = ~(np.abs(length - 1.0) <= NORMAL_LENGTH_TOLERANCE)  # NaN compares False: caught too
     if bad.any():
         k = int(np.argmax(bad))

@@ -28,9 +28,12 @@ SCALAR application-specific attribute per named attribute, its name upper-cased 
 underscore (``radius`` -> ``_RADIUS``), as glTF reserves for custom semantics; never quantized.
 Indices are uint16 when every index fits (below 65535, the primitive-restart value), else uint32.
 
-The document model is pygltflib's; the binary chunk is one numpy byte array that every
-attribute is computed into in place, and the containers are assembled here: pygltflib's own
-save path copies the blob several times and alone costs about as much as all of this module.
+The document model is pygltflib's; the containers are assembled here (pygltflib's own save
+path copies the blob several times and alone costs about as much as all of this module). The
+binary chunk is never held whole: every check and every accessor's bounds come first (the
+position bounds from the extreme coordinates, as the mapping to stored values is monotone),
+then each view is computed a block of vertices at a time into one small buffer and written,
+so writing a mesh needs a few MB beyond the mesh itself.
 """
 
 from __future__ import annotations
@@ -87,7 +90,7 @@ def write_glb(
     """
     doc, blob = build_document(path, surfaces, up=up, meters_per_unit=meters_per_unit,
                                source_units=source_units, tangents=tangents, quantize=quantize)
-    doc.buffers.append(g.Buffer(byteLength=int(blob.nbytes)))
+    doc.buffers.append(g.Buffer(byteLength=blob.nbytes))
     json_bytes = _json_bytes(path, doc)
     json_bytes += b" " * (_pad4(len(json_bytes)) - len(json_bytes))
     # Each mesh's views are padded to 4 bytes, so the blob already is.
@@ -99,7 +102,7 @@ def write_glb(
         f.write(struct.pack("<II", len(json_bytes), _CHUNK_JSON))
         f.write(json_bytes)
         f.write(struct.pack("<II", blob.nbytes, _CHUNK_BIN))
-        f.write(memoryview(blob))
+        blob.write_to(f)
     return total
 
 
@@ -124,17 +127,19 @@ def write_gltf(
         raise ExportError(f"cannot export {path}: a .gltf file needs a name that does not end in .bin")
     doc, blob = build_document(path, surfaces, up=up, meters_per_unit=meters_per_unit,
                                source_units=source_units, tangents=tangents, quantize=quantize)
-    doc.buffers.append(g.Buffer(byteLength=int(blob.nbytes), uri=quote(bin_path.name)))
+    doc.buffers.append(g.Buffer(byteLength=blob.nbytes, uri=quote(bin_path.name)))
     json_bytes = _json_bytes(path, doc)
     with atomic_files([bin_path, target]) as (bin_file, json_file):
-        bin_file.write(memoryview(blob))
+        blob.write_to(bin_file)
         json_file.write(json_bytes)
     return len(json_bytes) + blob.nbytes
 
 
 def build_document(path, surfaces, *, up, meters_per_unit, source_units, tangents=False,
-                   quantize=False) -> tuple[g.GLTF2, np.ndarray]:
-    """The glTF document (without its buffer) and the binary blob of every surface."""
+                   quantize=False) -> tuple[g.GLTF2, "_Blob"]:
+    """The glTF document (without its buffer) and the binary blob of every surface, described
+    (every check made, every accessor's bounds known) but not yet computed: ``_Blob.write_to``
+    computes and writes it a block of vertices at a time."""
     scale = check_arguments(path, surfaces, up, meters_per_unit)
     layouts = []
     for mesh, material in surfaces:
@@ -142,7 +147,6 @@ def build_document(path, surfaces, *, up, meters_per_unit, source_units, tangent
         check_material(mesh, material, path)
         check_channels(mesh, path)
         layouts.append(_Layout(mesh, tangents, quantize))
-    blob = np.zeros(sum(layout.nbytes for layout in layouts), dtype=np.uint8)
 
     doc = g.GLTF2(
         asset=g.Asset(
@@ -156,13 +160,15 @@ def build_document(path, surfaces, *, up, meters_per_unit, source_units, tangent
         doc.extensionsUsed = [QUANTIZATION]
         doc.extensionsRequired = [QUANTIZATION]
     offset = 0
+    fills = []
     for i, ((mesh, material), layout) in enumerate(zip(surfaces, layouts)):
-        node = _fill_mesh(doc, blob, offset, mesh, layout, up, scale, path)
+        node, fill = _describe_mesh(doc, offset, mesh, layout, up, scale, path)
+        fills.append(fill)
         offset += layout.nbytes
         doc.materials.append(_material(mesh, material))
         doc.meshes.append(g.Mesh(name=mesh.name, primitives=[_primitive(doc, i, layout)]))
         doc.nodes.append(node)
-    return doc, blob
+    return doc, _Blob(fills, offset)
 
 
 @dataclass(frozen=True)
@@ -227,11 +233,30 @@ class _Layout:
         self.accessors: dict[str, int] = {}  # attribute name (and "indices") -> accessor index, once filled
 
 
-def _fill_mesh(doc, blob, offset, mesh, layout, up, scale, path) -> g.Node:
-    """Compute one mesh's attributes into ``blob`` from ``offset``; add bufferViews, accessors.
+# Vertices computed per block when streaming the blob: the block's buffers stay in cache and the
+# file is written as it is computed, so a writer never holds the whole blob (memory: the mesh
+# and a few MB, not the mesh and its file).
+BLOCK_VERTICES = 1 << 16
 
-    Returns its node: translation (bounding-box centre in glTF metres, float64) and a uniform
-    scale: when quantized the dequantising one, else the unit's length in metres (omitted when 1).
+
+class _Blob:
+    """The binary chunk: ``nbytes`` long, computed and written block by block (``write_to``)."""
+
+    def __init__(self, fills, nbytes: int) -> None:
+        self._fills = fills
+        self.nbytes = int(nbytes)
+
+    def write_to(self, file) -> None:
+        for fill in self._fills:
+            fill(file.write)
+
+
+def _describe_mesh(doc, offset, mesh, layout, up, scale, path):
+    """One mesh's bufferViews and accessors (from ``offset`` of the blob), after checking its
+    values. Returns its node (translation: bounding-box centre in glTF metres, float64; a
+    uniform scale: when quantized the dequantising one, else the unit's length in metres,
+    omitted when 1) and ``fill(write)``, which computes the mesh's
+    views block by block and passes the bytes to ``write``, in blob order.
     """
     where = f"cannot export {path}: surface {mesh.name!r}"
     src, sign = _AXIS_MAPS[up]
@@ -246,19 +271,14 @@ def _fill_mesh(doc, blob, offset, mesh, layout, up, scale, path) -> g.Node:
         if attribute is not None and layout.quantize and attribute.stride != attribute.dtype.itemsize * attribute.width:
             view.byteStride = attribute.stride
         doc.bufferViews.append(view)
-        views[name] = (len(doc.bufferViews) - 1, blob[offset: offset + padded])
+        views[name] = len(doc.bufferViews) - 1
         offset += padded
     attributes = {a.name: a for a in layout.attributes}
     accessors = {}
 
-    def out(name):
-        attribute = attributes[name]
-        per_vertex = attribute.stride // attribute.dtype.itemsize
-        return views[name][1][: attribute.stride * v].view(attribute.dtype).reshape(v, per_vertex)[:, : attribute.width]
-
     def accessor(name, **bounds):
         attribute = attributes[name]
-        doc.accessors.append(g.Accessor(bufferView=views[name][0], componentType=attribute.component, count=v,
+        doc.accessors.append(g.Accessor(bufferView=views[name], componentType=attribute.component, count=v,
                                         type=attribute.type, normalized=attribute.normalized or None, **bounds))
         accessors[name] = len(doc.accessors) - 1
 
@@ -270,20 +290,30 @@ def _fill_mesh(doc, blob, offset, mesh, layout, up, scale, path) -> g.Node:
     if not (np.isfinite(centre * factor).all() and 0.5 * float(np.max(hi - lo)) * scale <= FLOAT32_MAX):
         raise ExportError(f"{where}: positions exceed float32's range after scaling by {scale}")
     node = g.Node(name=mesh.name, mesh=len(doc.meshes), translation=(centre[perm] * factor).tolist())
+    position_factor = factor
     if layout.quantize:
         half = float(np.max(hi - lo)) * 0.5 * scale
         half = half if half > 0.0 else 1.0
-        _map_axes(out("POSITION"), positions, perm, factor * (32767.0 / half), shift=centre, rounding=True)
+        position_factor = factor * (32767.0 / half)
         node.scale = [half, half, half]
     else:
         # Lengths in the scene's units, the unit's length in metres as the node's uniform scale:
         # float32 then stores (position - centre) itself, exactly whenever that is a float32
         # number (as on the watertight union's float32 grid), not a rounding of it times 1e-6.
-        _map_axes(out("POSITION"), positions, perm, np.asarray(sign, dtype=np.float64), shift=centre)
+        position_factor = np.asarray(sign, dtype=np.float64)
         if scale != 1.0:
             node.scale = [scale, scale, scale]
-    stored = out("POSITION")
-    pos_min, pos_max = column_bounds(stored)  # from the exact values stored
+
+    def map_positions(out, rows):
+        _map_axes(out, rows, perm, position_factor, shift=centre, rounding=layout.quantize)
+
+    # The stored bounds from the two extreme rows alone: every step of the mapping (shift,
+    # scale, rounding to the stored type) is monotone in each coordinate, so the extremes of
+    # the stored values are the mapped extremes of the coordinates, bit for bit.
+    position = attributes["POSITION"]
+    extremes = np.zeros((2, 3), dtype=position.dtype)
+    map_positions(extremes, np.stack([lo, hi]))
+    pos_min, pos_max = column_bounds(extremes)
     if not (np.isfinite(pos_min).all() and np.isfinite(pos_max).all()):
         raise ExportError(f"{where}: positions overflow float32 after scaling by {scale}")
     bounds = (lambda a: [int(x) for x in a]) if layout.quantize else (lambda a: a.tolist())
@@ -292,48 +322,80 @@ def _fill_mesh(doc, blob, offset, mesh, layout, up, scale, path) -> g.Node:
     # Normalise in float64 and round once: the stored vector is then as close to unit length
     # as its type allows (the validator checks it), with the axis map applied.
     length = normal_lengths(mesh, path)
-    _map_unit(out("NORMAL"), np.asarray(mesh.normals, dtype=np.float64), perm, np.asarray(sign), length)
+    normals = np.asarray(mesh.normals, dtype=np.float64)
     accessor("NORMAL")
 
+    tangent_rows = None
     if "TANGENT" in attributes:
-        _fill_tangents(out("TANGENT"), mesh, perm, np.asarray(sign), where)
+        tangent_rows = _checked_tangents(mesh, where)
         accessor("TANGENT")
 
     uvs = np.asarray(mesh.uvs, dtype=np.float64)
     if not np.isfinite(column_bounds(uvs)).all():
         raise ExportError(f"{where}: uvs contain NaN or infinity")
-    # glTF puts the UV origin at the top-left of the image; SurfaceMesh at the bottom-left.
-    uv_out = out("TEXCOORD_0")
-    if attributes["TEXCOORD_0"].normalized:
-        np.rint(uvs[:, 0] * 65535.0, out=uv_out[:, 0], casting="unsafe")
-        np.rint((1.0 - uvs[:, 1]) * 65535.0, out=uv_out[:, 1], casting="unsafe")
-    else:
-        if np.abs(column_bounds(uvs)).max() > FLOAT32_MAX - 1.0:  # 1 - v too
-            raise ExportError(f"{where}: uvs exceed float32's range")
-        uv_out[:, 0] = uvs[:, 0]
-        np.subtract(1.0, uvs[:, 1], out=uv_out[:, 1], casting="same_kind")
+    if not attributes["TEXCOORD_0"].normalized and np.abs(column_bounds(uvs)).max() > FLOAT32_MAX - 1.0:  # 1 - v too
+        raise ExportError(f"{where}: uvs exceed float32's range")
     accessor("TEXCOORD_0")
-
     if "COLOR_0" in attributes:
-        colors = np.clip(np.asarray(mesh.colors, dtype=np.float64), 0.0, 1.0)  # range checked in check_channels
-        color_out = out("COLOR_0")
-        if attributes["COLOR_0"].normalized:
-            np.rint(colors * 65535.0, out=color_out, casting="unsafe")
-        else:
-            color_out[:] = colors
         accessor("COLOR_0")
-    for semantic, name in layout.custom.items():
-        out(semantic)[:, 0] = mesh.attributes[name]
+    for semantic in layout.custom:
         accessor(semantic)
-
-    index_view, index_bytes = views["indices"]
-    np.copyto(index_bytes[: layout.index_bytes].view(layout.index_dtype).reshape(-1, 3), mesh.faces,
-              casting="unsafe")  # range checked in check_shapes
-    doc.accessors.append(g.Accessor(bufferView=index_view, componentType=layout.index_component,
+    doc.accessors.append(g.Accessor(bufferView=views["indices"], componentType=layout.index_component,
                                     count=3 * layout.triangle_count, type=g.SCALAR))
     accessors["indices"] = len(doc.accessors) - 1
     layout.accessors.update(accessors)
-    return node
+
+    def fill_attribute(name, out, rows):
+        if name == "POSITION":
+            map_positions(out, positions[rows])
+        elif name == "NORMAL":
+            _map_unit(out, normals[rows], perm, np.asarray(sign), length[rows])
+        elif name == "TANGENT":
+            xyz, w, tangent_length = tangent_rows
+            _map_unit(out[:, :3], xyz[rows], perm, np.asarray(sign), tangent_length[rows])
+            out[:, 3] = np.where(w[rows] < 0.0, -127, 127) if np.issubdtype(out.dtype, np.integer) else w[rows]
+        elif name == "TEXCOORD_0":
+            # glTF puts the UV origin at the top-left of the image; SurfaceMesh at the bottom-left.
+            if attributes[name].normalized:
+                np.rint(uvs[rows, 0] * 65535.0, out=out[:, 0], casting="unsafe")
+                np.rint((1.0 - uvs[rows, 1]) * 65535.0, out=out[:, 1], casting="unsafe")
+            else:
+                out[:, 0] = uvs[rows, 0]
+                np.subtract(1.0, uvs[rows, 1], out=out[:, 1], casting="same_kind")
+        elif name == "COLOR_0":
+            colors = np.clip(np.asarray(mesh.colors[rows], dtype=np.float64), 0.0, 1.0)  # range checked before
+            if attributes[name].normalized:
+                np.rint(colors * 65535.0, out=out, casting="unsafe")
+            else:
+                out[:] = colors
+        else:
+            out[:, 0] = mesh.attributes[layout.custom[name]][rows]
+
+    def fill(write) -> None:
+        widest = max([a.stride for a in layout.attributes] + [3 * layout.index_dtype.itemsize])
+        block = np.zeros(min(v, BLOCK_VERTICES) * widest + 4, dtype=np.uint8)
+        padding = np.zeros(4, dtype=np.uint8)
+        for attribute, nbytes, padded in zip(layout.attributes, layout.lengths, layout.views):
+            per_vertex = attribute.stride // attribute.dtype.itemsize
+            for start in range(0, v, BLOCK_VERTICES):
+                rows = slice(start, min(v, start + BLOCK_VERTICES))
+                raw = block[: (rows.stop - start) * attribute.stride]
+                if attribute.stride != attribute.dtype.itemsize * attribute.width:
+                    raw[:] = 0  # the padding of a padded vertex stride
+                out = raw.view(attribute.dtype).reshape(-1, per_vertex)[:, : attribute.width]
+                fill_attribute(attribute.name, out, rows)
+                write(memoryview(raw))
+            write(memoryview(padding[: padded - nbytes]))
+        faces = mesh.faces
+        triangles = len(block) // (3 * layout.index_dtype.itemsize)  # as many as the buffer holds
+        for start in range(0, layout.triangle_count, triangles):
+            rows = slice(start, min(layout.triangle_count, start + triangles))
+            raw = block[: (rows.stop - start) * 3 * layout.index_dtype.itemsize]
+            np.copyto(raw.view(layout.index_dtype).reshape(-1, 3), faces[rows], casting="unsafe")  # range checked
+            write(memoryview(raw))
+        write(memoryview(padding[: layout.views[-1] - layout.index_bytes]))
+
+    return node, fill
 
 
 def custom_name(name: str) -> str:
@@ -341,7 +403,8 @@ def custom_name(name: str) -> str:
     return "_" + name.upper()
 
 
-def _fill_tangents(out, mesh, perm, sign, where) -> None:
+def _checked_tangents(mesh, where):
+    """(xyz (V, 3), w (V,), |xyz| (V,)) of the mesh's tangents (analytic, or from the UVs)."""
     from cgamesh.meshing.uv import tangents_of
 
     try:
@@ -353,11 +416,7 @@ def _fill_tangents(out, mesh, perm, sign, where) -> None:
     w = tangents[:, 3]
     if not (np.isfinite(length).all() and (length > 0.5).all() and np.isin(w, (-1.0, 1.0)).all()):
         raise ExportError(f"{where}: tangents must be finite unit vectors with w = +-1")
-    _map_unit(out[:, :3], xyz, perm, sign, length)
-    if np.issubdtype(out.dtype, np.integer):
-        out[:, 3] = np.where(w < 0.0, -127, 127)
-    else:
-        out[:, 3] = w
+    return xyz, w, length
 
 
 def _map_axes(out, a, perm, factor, *, shift=None, divisor=None, rounding=False) -> None:

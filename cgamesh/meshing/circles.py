@@ -282,14 +282,19 @@ def orient_by_geometry(faces: np.ndarray, positions: np.ndarray, normals: np.nda
     vertices' signs tells its winding; its own geometric normal against the sum of its vertex
     normals does.
     """
-    chosen = np.flatnonzero(which)
-    if chosen.size == 0:
+    every = bool(np.all(which))
+    chosen = None if every else np.flatnonzero(which)
+    if not every and chosen.size == 0:
         return faces
-    corners = positions[faces[chosen]]
-    geometric = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    against = np.einsum("ti,ti->t", geometric, normals[faces[chosen]].sum(axis=1)) < 0.0
+    picked = faces if every else faces[chosen]
+    # corner by corner (three (T, 3) gathers, not one (T, 3, 3)); the same sums in the same order
+    first = positions[picked[:, 0]]
+    geometric = np.cross(positions[picked[:, 1]] - first, positions[picked[:, 2]] - first)
+    summed = normals[picked[:, 0]] + normals[picked[:, 1]] + normals[picked[:, 2]]
+    against = np.flatnonzero(np.einsum("ti,ti->t", geometric, summed) < 0.0)
+    rows = against if every else chosen[against]
     faces = faces.copy()
-    faces[chosen[against]] = faces[chosen[against]][:, [0, 2, 1]]
+    faces[rows] = faces[rows][:, [0, 2, 1]]
     return faces
 
 

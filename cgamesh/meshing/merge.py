@@ -3,6 +3,10 @@
 Positions, normals, UVs, colours and attributes are stacked, faces shifted by each piece's
 vertex offset (32-bit indices unless 2^31 vertices are exceeded), and the weld recomputed over
 all positions, so a viewer or a checker sees pieces that share a vertex as connected.
+
+``MergedMesh`` takes the pieces one at a time into arrays allocated once, so a producer that
+hands over each piece as it is made (the batched pass, chunk by chunk) never holds the pieces
+and the merged mesh at once: peak memory is the merged mesh and one piece.
 """
 
 from __future__ import annotations
@@ -14,6 +18,10 @@ import numpy as np
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.weld import weld_by_position
 
+# Per-vertex channels (name, columns); a channel is kept when every piece has it.
+_CHANNELS = (("positions", 3), ("normals", 3), ("uvs", 2), ("tangents", 4), ("uv_lengths", 2), ("colors", 3))
+_OPTIONAL = ("tangents", "uv_lengths", "colors")
+
 
 def merge(pieces: Sequence[SurfaceMesh], name: str) -> SurfaceMesh:
     """One mesh of every piece, in order.
@@ -23,30 +31,95 @@ def merge(pieces: Sequence[SurfaceMesh], name: str) -> SurfaceMesh:
     """
     if not pieces:
         raise ValueError("merge needs at least one mesh")
-    counts = np.array([p.vertex_count for p in pieces], dtype=np.int64)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    total = int(counts.sum())
-    index = np.int32 if total < 2**31 else np.int64
-    faces = np.concatenate([p.faces.astype(index) + index(start) for p, start in zip(pieces, starts)])
-    positions = np.concatenate([p.positions for p in pieces])
+    merged = MergedMesh(sum(p.vertex_count for p in pieces), sum(p.triangle_count for p in pieces))
+    for piece in pieces:
+        merged.append(piece)
+    return merged.finish(name)
 
-    def stacked(arrays):
-        return None if any(a is None for a in arrays) else np.concatenate(arrays)
 
-    attributes = None
-    if all(p.attributes for p in pieces):
-        keys = set.intersection(*(set(p.attributes) for p in pieces))
-        attributes = {key: np.concatenate([p.attributes[key] for p in pieces]) for key in sorted(keys)}
-    return SurfaceMesh(
-        name=name,
-        positions=positions,
-        normals=np.concatenate([p.normals for p in pieces]),
-        uvs=np.concatenate([p.uvs for p in pieces]),
-        faces=faces,
-        double_sided=any(p.double_sided for p in pieces),
-        tangents=stacked([p.tangents for p in pieces]),
-        uv_lengths=stacked([p.uv_lengths for p in pieces]),
-        weld=weld_by_position(positions).astype(index),
-        colors=stacked([p.colors for p in pieces]),
-        attributes=attributes,
-    )
+class MergedMesh:
+    """Pieces appended one by one into one mesh (``merge``'s result, piece for piece).
+
+    ``vertices`` and ``triangles`` are the expected totals; more is accepted (the arrays grow),
+    fewer costs nothing (untouched pages of the allocation are never made resident).
+    """
+
+    def __init__(self, vertices: int, triangles: int) -> None:
+        self._capacity = max(int(vertices), 1)
+        self._face_capacity = max(int(triangles), 1)
+        self._vertices = self._triangles = self._pieces = 0
+        self._channels: dict[str, np.ndarray | None] = {}
+        self._attributes: dict[str, np.ndarray] | None = None
+        self._faces = np.empty((self._face_capacity, 3), dtype=_index_type(self._capacity))
+        self._double_sided = False
+
+    def append(self, piece: SurfaceMesh) -> None:
+        v, f = piece.vertex_count, piece.triangle_count
+        self._reserve(self._vertices + v, self._triangles + f)
+        rows = slice(self._vertices, self._vertices + v)
+        first = self._pieces == 0
+        for channel, columns in _CHANNELS:
+            values = getattr(piece, channel)
+            if first and values is not None:
+                self._channels[channel] = np.empty((self._capacity, columns))
+            if values is None:
+                self._channels[channel] = None  # a piece without it: the merged mesh has none
+            elif self._channels.get(channel) is not None:
+                self._channels[channel][rows] = values
+        if first:
+            self._attributes = None if not piece.attributes else {
+                key: np.empty(self._capacity) for key in piece.attributes}
+        elif self._attributes is not None:
+            if not piece.attributes:
+                self._attributes = None
+            else:
+                self._attributes = {k: a for k, a in self._attributes.items() if k in piece.attributes}
+        for key, array in (self._attributes or {}).items():
+            array[rows] = piece.attributes[key]
+        np.add(piece.faces, self._vertices, out=self._faces[self._triangles:self._triangles + f], casting="unsafe")
+        self._double_sided |= bool(piece.double_sided)
+        self._vertices += v
+        self._triangles += f
+        self._pieces += 1
+
+    @property
+    def empty(self) -> bool:
+        return self._pieces == 0
+
+    def finish(self, name: str) -> SurfaceMesh:
+        """The merged mesh, welded; 32-bit indices below 2^31 vertices."""
+        if not self._pieces:
+            raise ValueError("merge needs at least one mesh")
+        v = self._vertices
+        index = _index_type(v)
+        channels = {k: (None if a is None else a[:v]) for k, a in self._channels.items()}
+        faces = self._faces[:self._triangles].astype(index, copy=False)
+        return SurfaceMesh(
+            name=name, positions=channels["positions"], normals=channels["normals"], uvs=channels["uvs"],
+            faces=faces, double_sided=self._double_sided,
+            tangents=channels.get("tangents"), uv_lengths=channels.get("uv_lengths"), colors=channels.get("colors"),
+            weld=weld_by_position(channels["positions"]).astype(index),
+            attributes=None if self._attributes is None else {k: a[:v] for k, a in sorted(self._attributes.items())})
+
+    def _reserve(self, vertices: int, triangles: int) -> None:
+        if vertices > self._capacity:
+            self._capacity = max(vertices, 2 * self._capacity)
+            for channel, array in self._channels.items():
+                if array is not None:
+                    self._channels[channel] = _grown(array, self._capacity, self._vertices)
+            if self._attributes is not None:
+                self._attributes = {k: _grown(a, self._capacity, self._vertices) for k, a in self._attributes.items()}
+        if triangles > self._face_capacity or _index_type(vertices) != self._faces.dtype:
+            self._face_capacity = max(triangles, 2 * self._face_capacity)
+            self._faces = _grown(self._faces.astype(_index_type(vertices), copy=False), self._face_capacity,
+                                 self._triangles)
+
+
+def _index_type(vertices: int) -> type:
+    return np.int32 if vertices < 2**31 else np.int64
+
+
+def _grown(array: np.ndarray, rows: int, used: int) -> np.ndarray:
+    bigger = np.empty((rows,) + array.shape[1:], dtype=array.dtype)
+    bigger[:used] = array[:used]
+    return bigger

@@ -7,7 +7,9 @@ circle is grade 3, a rotor grades 0, 2, 4), and the matrix for that pattern is b
 and cached: a circle times a circle is a 100-column product, not 1024, with no
 per-element Python. Where an operand lives in a smaller subspace than whole grades (a
 Euclidean rotation rotor: 1, e12, e13, e23), callers may name its blades instead
-(``Blades``): a product of two such rotors is then 16 columns, not 121.
+(``Blades``): a product of two such rotors is then 16 columns, not 121. Where the operands
+carry many blades (circles, duals), the same sums are formed one operand blade at a time
+instead of through the mostly-zero matrix (``_sparse_steps``): 2-5x faster, the same bits.
 """
 
 from __future__ import annotations
@@ -69,13 +71,67 @@ def _bilinear_map(kind: str, grades_a: tuple, grades_b: tuple, grades_out: tuple
     return blades_a, blades_b, blades_out, matrix
 
 
+@lru_cache(maxsize=None)
+def _sparse_steps(kind: str, grades_a: tuple, grades_b: tuple, grades_out: tuple):
+    """The product as one step per blade i of a: the result columns ks gain a_i * (signs * b_js).
+
+    Each pair of blades makes one blade, so the sign-and-placement matrix has one non-zero per
+    row; summing its terms in row order from zero is what the matrix product does (a zero
+    entry adds nothing), so both ways agree bit for bit on a batch of two rows or more along
+    one axis, up to 256 blade pairs (measured against numpy's and OpenBLAS's products).
+    Returns None where the dense matrix product is the faster (few blade pairs and several
+    result blades: small rotors, vectors).
+    """
+    blades_a, blades_b, blades_out, matrix = _bilinear_map(kind, grades_a, grades_b, grades_out)
+    pairs = blades_a.size * blades_b.size
+    if (pairs <= 25 and blades_out.size > 1) or pairs > 256:
+        return None  # (past 256 pairs the matrix product sums in blocks: another order)
+    per_a = matrix.reshape(blades_a.size, blades_b.size, -1)
+    steps = []
+    for i in range(blades_a.size):
+        js, ks = np.nonzero(per_a[i])
+        if js.size:
+            steps.append((i, js, ks, per_a[i][js, ks][:, None]))
+    return tuple(steps)
+
+
+@lru_cache(maxsize=None)
+def _single_blade_columns(kind: str, grades_a: tuple, grades_b: tuple, grades_out: tuple):
+    """A product with a one-blade operand as a signed gather: result column c is a's column
+    ``source[c]`` times b's coefficient times ``factor[c]`` (0 where no term lands)."""
+    blades_a, _, blades_out, _ = _bilinear_map(kind, grades_a, grades_b, grades_out)
+    source = np.zeros(BLADE_COUNT, dtype=np.int64)
+    factor = np.zeros(BLADE_COUNT)
+    for i, _, ks, signs in _sparse_steps(kind, grades_a, grades_b, grades_out):
+        source[blades_out[ks]] = blades_a[i]
+        factor[blades_out[ks]] = signs[:, 0]
+    return source, factor
+
+
 def _product(kind, a, b, grades_a, grades_b, grades_out):
-    blades_a, blades_b, blades_out, matrix = _bilinear_map(
-        kind, _selection(grades_a), _selection(grades_b), _selection(grades_out)
-    )
+    selections = _selection(grades_a), _selection(grades_b), _selection(grades_out)
+    blades_a, blades_b, blades_out, matrix = _bilinear_map(kind, *selections)
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
     shape = np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
+    # one batch axis of two rows or more: there the matrix product sums row by row in order
+    steps = _sparse_steps(kind, *selections) if blades_out.size and len(shape) == 1 and shape[0] > 1 else None
+    if steps is not None and blades_b.size == 1:
+        # a times one blade (a dual): each result blade takes one term, a signed column of a
+        # (0.0 + term, as the sums from zero give: -0.0 becomes 0.0); np.take, several times
+        # faster than indexing columns with an index array
+        source, factor = _single_blade_columns(kind, *selections)
+        coefficient = np.broadcast_to(b[..., blades_b[0]], shape)[:, None]
+        return np.take(np.broadcast_to(a, shape + (BLADE_COUNT,)), source, axis=-1) * (coefficient * factor) + 0.0
+    if steps is not None:
+        # one row per blade, the batch along it: each step is a few whole-row operations
+        rows = shape[0]
+        left = np.take(np.broadcast_to(a, shape + (BLADE_COUNT,)), blades_a, axis=-1).T
+        right = np.take(np.broadcast_to(b, shape + (BLADE_COUNT,)), blades_b, axis=-1).T
+        result = np.zeros((BLADE_COUNT, rows))
+        for i, js, ks, signs in steps:
+            result[blades_out[ks]] += left[i] * (right[js] * signs)
+        return np.ascontiguousarray(result.T)
     out = np.zeros(shape + (BLADE_COUNT,))
     if blades_out.size:
         left = a[..., blades_a][..., :, None]

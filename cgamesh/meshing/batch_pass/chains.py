@@ -16,6 +16,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from cgamesh.budget import BATCHED_CHUNK_RINGS
 from cgamesh.errors import CgameshError
 from cgamesh.meshing.batch_pass.motions import ChainMotions, ChainNodes
 from cgamesh.meshing.batch_pass.rings import TubeArrays, mesh_chains
@@ -24,8 +25,9 @@ from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.node_normals import envelope_normals
 
 # Rings meshed per chunk: the circle blades and their products (about 3 kB per ring) stay
-# within a core's cache (measured: 2,048 rings ~25% faster than 16,384 on the fornix).
-CHUNK_RINGS = 2048
+# within a core's cache (measured: 2,048 rings ~25% faster than 16,384 on the fornix); the
+# memory budget prices a batched run by it.
+CHUNK_RINGS = BATCHED_CHUNK_RINGS
 SOMA_SEGMENT = -1.0
 
 
@@ -64,9 +66,10 @@ def _interp(values: np.ndarray, first: np.ndarray, count: np.ndarray, chain: np.
 
 
 def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, options, stem: str, label_name,
-                single: Callable, progress: Callable) -> tuple[list[SurfaceMesh], list[str]]:
-    """The tube meshes of ``chains`` in chain order (runs of batched chains as one mesh each,
-    unless ``options.split``), and the skipped chains' lines; updates ``tangents`` and
+                single: Callable, progress: Callable, sink: Callable[[SurfaceMesh], None]) -> list[str]:
+    """Hands the tube meshes of ``chains`` to ``sink`` in chain order (runs of batched chains as
+    one mesh each, unless ``options.split``), chunk by chunk, so a caller that merges them holds
+    one chunk's pieces at a time; returns the skipped chains' lines. Updates ``tangents`` and
     ``segment_of`` (the junction spheres' direction and segment) as the per-chain loop does."""
     counts = np.array([len(c.nodes) for c in chains], dtype=np.int64)
     total = len(chains)
@@ -93,43 +96,44 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
     m_t = (envelope_normals(m_p, m_r, _segment_tangents(m_p, m_first[meshable], m_count[meshable]),
                             m_first[meshable], m_count[meshable]) if len(m_p) else np.zeros((0, 3)))
 
-    arrays: dict[int, tuple] = {}
     fallback = meshable & mixed
-    pending = np.flatnonzero(batched)
     rings_of = (m_count - 1) * (options.subdivide + 1) + 1
-    chunk_ids = np.cumsum(rings_of[pending]) // CHUNK_RINGS if len(pending) else np.zeros(0, np.int64)
-    for chunk in np.unique(chunk_ids):
-        members = pending[chunk_ids == chunk]
-        result = _mesh_chunk(members, m_first, m_count, m_p, m_t, m_r, options)
-        fallback[members[result.fallback]] = True
-        arrays[int(chunk)] = (members, result)
-        progress(chains[int(members[-1])].label, len(members))
-
-    # the per-chain path for the rest, in order, with its own errors
-    pieces_by_chain: dict[int, SurfaceMesh | None] = {}
-    skipped: list[str] = []
-    meshed = batched & ~fallback
+    # chunks of about CHUNK_RINGS rings of batched chains; a chain meshed alone joins the chunk
+    # it falls in by index, so pieces come out in chain order chunk after chunk
+    chunk_of = np.cumsum(np.where(batched, rings_of, 0)) // CHUNK_RINGS
+    bounds = np.flatnonzero(np.diff(chunk_of)) + 1
+    skipped: list[tuple[int, str]] = []
+    meshed = batched.copy()
     scratch_t, scratch_s = tangents.copy(), segment_of.copy()
-    for index in np.flatnonzero(~batched | fallback):
-        try:
-            pieces_by_chain[int(index)] = single(chains[index], int(index), scratch_t, scratch_s)
-        except CgameshError as error:
-            if options.strict:
-                raise
-            skipped.append((int(index), str(error)))
-            progress(chains[int(index)].label, 1)
-            continue
-        meshed[index] = pieces_by_chain[int(index)] is not None
-        if not batched[index]:  # a batched chain handed back was counted with its chunk
-            progress(chains[int(index)].label, 1)
-    skipped = [line for _, line in sorted(skipped)]
+    for chunk in np.split(np.arange(total), bounds) if total else []:
+        members = chunk[batched[chunk]]
+        batched_meshes: dict[int, SurfaceMesh] = {}
+        if len(members):
+            result = _mesh_chunk(members, m_first, m_count, m_p, m_t, m_r, options)
+            fallback[members[result.fallback]] = True
+            batched_meshes = _chain_meshes(members, result, m_first, m_count, m_r, m_t, scalar, m_nodes, chains,
+                                           options, stem, label_name)
+            del result  # the chunk's scratch arrays, freed before the next chunk
+            progress(chains[int(members[-1])].label, len(members))
+        # the per-chain path for the rest of the chunk, in order, with its own errors
+        pieces_by_chain: dict[int, SurfaceMesh | None] = {}
+        for index in chunk[~batched[chunk] | fallback[chunk]]:
+            try:
+                pieces_by_chain[int(index)] = single(chains[index], int(index), scratch_t, scratch_s)
+            except CgameshError as error:
+                if options.strict:
+                    raise
+                skipped.append((int(index), str(error)))
+                meshed[index] = False
+                progress(chains[int(index)].label, 1)
+                continue
+            meshed[index] = pieces_by_chain[int(index)] is not None
+            if not batched[index]:  # a batched chain handed back was counted with its chunk
+                progress(chains[int(index)].label, 1)
+        for piece in _ordered(batched_meshes, pieces_by_chain):
+            sink(piece)
     _junction_events(meshed, m_first, m_count, m_nodes, m_t, tangents, segment_of)
-
-    batched_meshes = {}
-    for members, result in arrays.values():
-        batched_meshes.update(_chain_meshes(members, result, m_first, m_count, m_r, m_t, scalar, m_nodes, chains,
-                                            options, stem, label_name))
-    return _ordered(batched_meshes, pieces_by_chain), skipped
+    return [line for _, line in sorted(skipped)]
 
 
 def _mesh_chunk(members, first, count, p, t, r, options) -> TubeArrays:

@@ -21,7 +21,7 @@ from cgamesh.geometry.algebra import products, rotors
 from cgamesh.meshing import normals as normal_field
 from cgamesh.meshing.batch_pass.motions import ChainMotions
 from cgamesh.meshing.circles import (E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION, OUTWARD_TRUST, STATIONARY_FRACTION,
-                                     RingNormals, orient_by_geometry)
+                                     RingNormals)
 
 
 @dataclass(frozen=True)
@@ -248,6 +248,12 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     faces = (row.reshape(1, -1, 3) + (ring_local[pair] * columns)[:, None, None])  # (P, 2 (columns-1), 3)
     swap = flip[ring_chain[pair]]
     faces[swap] = faces[swap][:, :, [0, 2, 1]]
+    strip = np.flatnonzero(suspicious[pair] | suspicious[pair + 1])
+    if strip.size:
+        against = _against_normals(positions, normals, pair[strip], swap[strip])  # (S, columns - 1, 2)
+        rows = faces[strip]
+        rows[against.reshape(len(strip), -1)] = rows[against.reshape(len(strip), -1)][:, [0, 2, 1]]
+        faces[strip] = rows
     face_chain = np.repeat(ring_chain[pair], 2 * (columns - 1))
     faces = faces.reshape(-1, 3)
 
@@ -258,15 +264,35 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     uvs = uvs[kept_rings].reshape(-1, 2)
     vertex_chain = np.repeat(ring_chain[kept_rings], columns)
     vertex_ring = np.repeat(ring_local[kept_rings], columns)
-    strip = suspicious[pair] | suspicious[pair + 1]
-    if np.any(strip):
-        counts = np.bincount(vertex_chain, minlength=chains)
-        start = np.concatenate([[0], np.cumsum(counts)[:-1]])
-        global_faces = faces + start[face_chain][:, None]
-        oriented = orient_by_geometry(global_faces, positions, normals, np.repeat(strip, 2 * (columns - 1)))
-        faces = oriented - start[face_chain][:, None]
     return TubeArrays(positions, normals, uvs, faces, face_chain, vertex_chain, vertex_ring,
                       np.stack([circumference, np.where(length > 0.0, length, circumference)], axis=1), fallback)
+
+
+def _against_normals(positions: np.ndarray, normals: np.ndarray, pair: np.ndarray, swap: np.ndarray) -> np.ndarray:
+    """``circles.orient_by_geometry``'s test on the triangles between rings ``pair`` and
+    ``pair + 1`` ((R, columns, 3) grids): (S, columns - 1, 2) True where a triangle's geometric
+    normal points against the sum of its vertex normals. The corners come from slices of the
+    ring grid instead of gathers by index, in each triangle's own corner order (``swap``: wound
+    the other way), so the cross products and sums are those of orient_by_geometry, bit for bit.
+    """
+    here, there = positions[pair], positions[pair + 1]
+    n_here, n_there = normals[pair], normals[pair + 1]
+    # (first, second, third) corner of triangle 0 (j, j + 1, j + columns) and 1 (j + 1, j + columns + 1,
+    # j + columns) of each quad; swapped: (first, third, second)
+    corners = [((here[:, :-1], n_here[:, :-1]), (here[:, 1:], n_here[:, 1:]), (there[:, :-1], n_there[:, :-1])),
+               ((here[:, 1:], n_here[:, 1:]), (there[:, 1:], n_there[:, 1:]), (there[:, :-1], n_there[:, :-1]))]
+    out = np.empty((len(pair), positions.shape[1] - 1, 2), dtype=bool)
+    for kind, (a, b, c) in enumerate(corners):
+        for flipped in (False, True):
+            rows = np.flatnonzero(swap == flipped)
+            if not rows.size:
+                continue
+            first, second, third = (a, c, b) if flipped else (a, b, c)
+            p0 = first[0][rows]
+            geometric = np.cross(second[0][rows] - p0, third[0][rows] - p0).reshape(-1, 3)
+            summed = (first[1][rows] + second[1][rows] + third[1][rows]).reshape(-1, 3)
+            out[rows, :, kind] = (np.einsum("ti,ti->t", geometric, summed) < 0.0).reshape(len(rows), -1)
+    return out
 
 
 def _frame_values(frame: np.ndarray, theta: np.ndarray, speed: np.ndarray) -> np.ndarray:
