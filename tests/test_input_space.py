@@ -17,7 +17,7 @@ import warnings
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from cgamesh.errors import InvalidInputError
@@ -115,8 +115,21 @@ def assert_on_segment(points, a, b):
     assert np.linalg.norm(points - a - s[:, None] * d, axis=1).max() <= 1e-9 * size
 
 
+def _pairs_example(controls, curve="linear", align="false", around=2, along=2):
+    """A drawn point-pair scene (as ``scenes`` gives it) from (a, b) end points."""
+    lines = [f"{{a: {list(map(float, a))}, b: {list(map(float, b))}}}" for a, b in controls]
+    body = "".join(f"      - {line}\n" for line in lines)
+    text = (f"cgamesh: 1\nsurfaces:\n  - name: s\n    type: point_pairs\n    curve: {curve}\n"
+            f"    closed: false\n    align: {align}\n    caps: false\n"
+            f"    resolution: {{around: {around}, along: {along}}}\n    controls:\n{body}")
+    drawn = [("pair", np.array(a, dtype=float), np.array(b, dtype=float), line) for (a, b), line in zip(controls, lines)]
+    return text, "point_pairs", drawn, around, False, False
+
+
 @PROPERTY
 @given(scenes())
+# Found by a random search: the scan for lines projected where no projection exists (a warning).
+@example(_pairs_example([((0, 0, 0), (0, 0, 1)), ((1e-9, 0, 0), (1e-9, 0, 1)), ((0, 0, 1.5), (0, 0, 2.5))]))
 def test_every_scene_meshes_onto_its_controls_or_is_refused_in_one_line(drawn):
     text, kind, controls, around, caps, closed = drawn
     meshes = mesh_or_refuse(text)
