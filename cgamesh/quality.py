@@ -287,30 +287,32 @@ def _signed_uv_area(uvs: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 # --- reading meshes back from files -------------------------------------------------------------
 
-def load_meshes(path: str | Path) -> list[SurfaceMesh]:
+def load_meshes(path: str | Path, limit: int | None = None) -> list[SurfaceMesh]:
     """The surfaces of an exported file (.glb, .gltf, .usd*, .obj, .ply, .stl) as SurfaceMeshes.
 
     Stored vertices as the file has them (a USD mesh's faceVarying values become one vertex per
     triangle corner); glTF and USD positions are in metres / stage units, without transforms;
     STL carries no vertex normals (normals are then the face normals, and not judged), OBJ /
-    PLY / STL no names beyond the file's.
+    PLY / STL no names beyond the file's. ``limit``: the most bytes read and decoded
+    (readers.files.read_limit; None for its default).
     """
-    from cgamesh.readers.files import check_regular
+    from cgamesh.readers.files import check_regular, read_limit
 
     path = Path(path)
     suffix = path.suffix.lower()
-    check_regular(path)  # a missing file, a folder, a FIFO or a device: one line, before any reader
+    limit = read_limit() if limit is None else limit
+    check_regular(path, limit)  # a missing file, a folder, a FIFO or a device: one line, before any reader
     if suffix in (".glb", ".gltf"):
         from cgamesh.readers.readback import read_gltf
 
-        return read_gltf(path)
+        return read_gltf(path, limit=limit)
     if suffix in (".usd", ".usda", ".usdc", ".usdz"):
         from cgamesh.readers.readback import read_usd
 
-        return read_usd(path)
+        return read_usd(path, limit=limit)
     if suffix in (".obj", ".ply", ".stl"):
         from cgamesh.readers.readback import read_trimesh
 
-        return read_trimesh(path)
+        return read_trimesh(path, limit=limit)
     raise InvalidInputError(f"{path}: cannot check this kind of file; expected a scene (.yaml) or one of "
                             ".glb, .gltf, .usd, .usda, .usdc, .usdz, .obj, .ply, .stl")

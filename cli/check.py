@@ -43,7 +43,9 @@ def run(args: argparse.Namespace):
         scene = load_scene(path, rendering=False)  # the rendering keys are render's and verify's
         meshes = [mesh for mesh, _ in mesh_scene(scene, Resolution(args.around, args.along), max_memory=args.max_memory)]
     else:
-        meshes = load_meshes(path)
+        from cgamesh.readers.files import read_limit
+
+        meshes = load_meshes(path, read_limit(args.max_memory))
     limits = Thresholds(max_aspect_ratio=args.max_aspect, min_angle_degrees=args.min_angle,
                         uv_flips=args.max_uv_flips, max_normal_deviation_degrees=args.max_normal_deviation)
     result = report(meshes, str(path), limits)

@@ -58,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
     from cgamesh.inputs.scene import load_scene
     from cgamesh.tracer import verify as v
     from cgamesh.tracer.evolved import RootFinder
+    from cgamesh.readers.files import read_limit
     from cgamesh.tracer.meshfile import read_glb
     from cgamesh.tracer.png import write_png
     from cgamesh.tracer.world import build_world
@@ -67,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
     if args.image and Path(args.image).suffix.lower() != ".png":
         raise InvalidInputError(f"{args.image}: expected a .png image file")
     scene = load_scene(args.scene)
-    meshes = read_glb(args.mesh, scene.up, scene.meters_per_unit)
+    meshes = read_glb(args.mesh, scene.up, scene.meters_per_unit, read_limit(args.max_memory))
     world = build_world(scene, RootFinder(args.root_finder, args.samples), primitives=False)
     thresholds = v.Thresholds(args.max_angle, args.max_distance, args.max_missed)
     with Progress(len(world.surfaces()), enabled=not args.quiet) as progress:

@@ -538,3 +538,37 @@ def test_a_usd_file_read_in_the_child_is_the_file(crate, tmp_path):
     for a, b in zip(here, child):
         for field in ("positions", "normals", "uvs", "faces"):
             np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+
+
+# --- the read limit follows --max-memory --------------------------------------------------------------
+
+def test_the_read_limit_is_the_budget_when_one_is_given():
+    from cgamesh.budget import FIXED_OVERHEAD
+    from cgamesh.readers.files import MAX_FILE_BYTES, read_limit
+
+    assert read_limit() == MAX_FILE_BYTES  # no --max-memory: the readers' own default
+    assert read_limit(40 << 20) == read_limit("40M") == 40 << 20
+    assert read_limit("5G") == 5 << 30  # above the default too: the budget decides
+    assert read_limit(1024) == FIXED_OVERHEAD  # never below what every budget allows
+
+
+def test_check_and_verify_reads_follow_max_memory(corpus, tmp_path):
+    """A .gltf whose buffer file is 48 MiB (the mesh, then a sparse tail of zeros): read under the
+    default limit, refused before it is read under --max-memory 40M, in one line naming the
+    buffer file and the knob."""
+    gltf = Base.gltf_with_uri(tmp_path, "beside.bin")
+    big = 48 << 20
+    os.truncate(tmp_path / "beside.bin", big)
+    document = json.loads(gltf.read_text())
+    document["buffers"][0]["byteLength"] = big
+    gltf.write_text(json.dumps(document))
+    assert run(["check", "--strict", "-q", str(gltf)]).returncode == 0
+    assert run(["verify", str(SCENE), str(gltf), "-q"]).returncode == 0
+    for command in (["check", str(gltf), "--max-memory", "40M"],
+                    ["verify", str(SCENE), str(gltf), "-q", "--max-memory", "40M"]):
+        result = run(command)
+        assert_one_clean_line(result, {2}, gltf)
+        assert "beside.bin" in result.stderr and f"{big} bytes" in result.stderr
+        assert "more than the 40 MiB a read may take (--max-memory)" in result.stderr
+    # A budget above the file's size reads it.
+    assert run(["check", "--strict", "-q", str(gltf), "--max-memory", "64M"]).returncode == 0

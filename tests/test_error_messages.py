@@ -238,7 +238,8 @@ def test_a_ribbon_through_an_end_point_at_infinity_is_refused(tmp_path):
                     "      - {a: [0.0, 0.0, 0.0], b: [1.0, 0.0, 0.0]}\n"
                     "      - {a: [1.3416407864998738, 0.0, 0.6708203932499369], b: [2.341640786499874, 0.0, 0.6708203932499369]}\n")
     refused([path, "-o", tmp_path / "x.glb", "--around", "2", "--along", "3"],
-            r"flat\.yaml:3: surfaces\[0\]: .*end point at infinity at segment 0, alpha = 0\.5")
+            r"flat\.yaml:3: surfaces\[0\]: .*end point at infinity \(a flat point\) between segment 0, "
+            r"alpha = 0\.49\d* and alpha = 0\.5 \(closest at alpha = 0\.5, length unbounded\); add a control in between$")
 
 
 def test_ribbons_of_two_rulings(tmp_path):
@@ -298,6 +299,9 @@ def test_opposite_circles_unaligned_interpolating_through_a_line_are_refused_whe
     path.write_text(scene(["{center: [0, 0, 0], normal: [1, 0, 0], radius: 1.0}",
                            "{center: [1.3416407864998738, 0, 0.6708203932499369], normal: [-1, 0, 0], radius: 0.5}"],
                           extra=f"    align: false\n    resolution: {{around: 3, along: {along}}}\n"))
-    refused([path, "-o", tmp_path / "o.glb"], r"opposite\.yaml:3: surfaces\[0\]: the interpolated circle is a line "
-                                              r"\(through infinity\) at segment 0, alpha = ")
+    refused([path, "-o", tmp_path / "o.glb"], r"opposite\.yaml:3: surfaces\[0\]: surface 'tube': the interpolated circle turns "
+                                              r"into a line \(a circle through infinity\) between segment 0, "
+                                              r"alpha = 0\.32\d* and alpha = 0\.33\d* \(closest at alpha = 0\.333333, "
+                                              r"radius unbounded\); controls 0 and 1 have opposite orientations "
+                                              r"\(align: false\); set align: true, or interpolation: motor$")
     assert not (tmp_path / "o.glb").exists()

@@ -18,7 +18,7 @@ import warnings
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from cgamesh.errors import InvalidInputError
@@ -118,8 +118,23 @@ def assert_on_segment(points, a, b):
     assert np.linalg.norm(points - a - s[:, None] * d, axis=1).max() <= 1e-9 * size
 
 
+def _pairs_example(controls, curve="linear", align="false", around=2, along=2):
+    """A drawn point-pair scene (as ``scenes`` gives it) from (a, b) end points."""
+    lines = [f"{{a: {list(map(float, a))}, b: {list(map(float, b))}}}" for a, b in controls]
+    body = "".join(f"      - {line}\n" for line in lines)
+    text = (f"cgamesh: 1\nsurfaces:\n  - name: s\n    type: point_pairs\n    curve: {curve}\n"
+            f"    closed: false\n    align: {align}\n    caps: false\n"
+            f"    resolution: {{around: {around}, along: {along}}}\n    controls:\n{body}")
+    drawn = [("pair", np.array(a, dtype=float), np.array(b, dtype=float), line) for (a, b), line in zip(controls, lines)]
+    return text, "point_pairs", drawn, around, False, False
+
+
 @PROPERTY
 @given(scenes())
+# Found by a random search: the scan for lines projected where no projection exists (a warning).
+@example(_pairs_example([((0, 0, 0), (0, 0, 1)), ((1e-9, 0, 0), (1e-9, 0, 1)), ((0, 0, 1.5), (0, 0, 2.5))]))
+@example(_pairs_example([((0, 0, 0), (1, 0, 1)), ((1e-9, 0, 0), (1.000000001, 0, 1)),
+                         ((1.0606601717798214, 0, 1.0606601717798214), (2.0606601717798214, 0, 2.0606601717798214))]))
 def test_every_scene_meshes_onto_its_controls_or_is_refused_in_one_line(drawn):
     text, kind, controls, around, caps, closed = drawn
     meshes = mesh_or_refuse(text)
@@ -143,6 +158,33 @@ def test_every_scene_meshes_onto_its_controls_or_is_refused_in_one_line(drawn):
             assert np.abs(cosine).max() <= 1e-6
     else:
         assert_on_segment(first, controls[0][1], controls[0][2])
+
+
+FAR_AXIS_RATIONAL = ("cgamesh: 1\nsurfaces:\n  - name: s\n    type: circles\n    curve: rational_bezier\n"
+                     "    closed: false\n    align: true\n    caps: false\n    resolution: {around: 16, along: 17}\n"
+                     "    controls:\n"
+                     "      - {center: [732.9759048910715, 869.3111423225721, 645.3281676861824], normal: [-1.0, 0.0, 0.0], "
+                     "radius: 0.003, weight: 9.710008716837494}\n"
+                     "      - {center: [732.9759048910715, 869.3111423225721, 645.3281676861824], normal: [-1.0, 0.0, 0.0], "
+                     "radius: 0.003, weight: 9.710008716837494}\n"
+                     "      - {center: [732.9609048910716, 869.3111423225721, 645.3281676861824], normal: [0.0, -1.0, 0.0], "
+                     "radius: 0.007118020536816981, weight: 0.020347433849963317}\n")
+
+
+@pytest.mark.xfail(strict=True, reason="known defect: normals of the first rings leave the circle's normal plane by "
+                   "up to 4e-5 (2.8e-4 at t = 1e-3) when an exact-axis control sits far from the origin with a "
+                   "repeated control and a weight ratio of 500; tilting that normal by 1e-3, or moving the scene to "
+                   "the origin, brings it to 2e-9")
+def test_a_far_rational_tube_from_an_exact_axis_with_a_repeated_control():
+    """Found by a random search of the property above (rational Bezier only)."""
+    controls = [("circle", np.array([732.9759048910715, 869.3111423225721, 645.3281676861824]), np.array([-1.0, 0.0, 0.0]),
+                 0.003, ""),
+                ("circle", np.array([732.9759048910715, 869.3111423225721, 645.3281676861824]), np.array([-1.0, 0.0, 0.0]),
+                 0.003, ""),
+                ("circle", np.array([732.9609048910716, 869.3111423225721, 645.3281676861824]), np.array([0.0, -1.0, 0.0]),
+                 0.007118020536816981, "")]
+    test_every_scene_meshes_onto_its_controls_or_is_refused_in_one_line.hypothesis.inner_test(
+        (FAR_AXIS_RATIONAL, "circles", controls, 16, False, False))
 
 
 @settings(max_examples=max(6, EXAMPLES // 6), deadline=None, suppress_health_check=[HealthCheck.too_slow,

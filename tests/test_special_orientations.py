@@ -96,12 +96,13 @@ def test_transported_frames_through_axes_half_turns_and_repeats(closed):
     np.testing.assert_allclose(np.einsum("ij,ij->i", u, v), 0.0, atol=1e-12)
 
 
-def tube_scene(curve: str, first: list, second: list, extra: str = "") -> str:
+def tube_scene(curve: str, first: list, second: list, extra: str = "", third: list = (0, 0.5, 3)) -> str:
     weights = ", weight: 2" if curve == "rational_bezier" else ""
+    third = list(third)
     return (f"cgamesh: 1\nsurfaces:\n  - name: t\n    type: circles\n    curve: {curve}\n{extra}    controls:\n"
             f"      - {{center: [0, 0, 0], normal: {first}, radius: 1{weights}}}\n"
             f"      - {{center: [0, 0, 2], normal: {second}, radius: 0.5}}\n"
-            f"      - {{center: [0, 0.5, 3], normal: {second}, radius: 0.5}}\n")
+            f"      - {{center: {third}, normal: {second}, radius: 0.5}}\n")
 
 
 def assert_ends_on_their_circles(mesh, around: int) -> None:
@@ -133,8 +134,12 @@ def test_a_tube_whose_first_circle_faces_minus_z_to_a_tolerance(curve):
 @pytest.mark.parametrize("first, second", [(a.tolist(), b.tolist()) for a, b in itertools.product(AXES, AXES)
                                            if a[2] != 0 or b[2] != 0][::3])
 def test_tubes_between_axis_aligned_circles(curve, first, second):
-    """Circles facing exact axes, consecutive ones parallel, antiparallel or perpendicular."""
-    spec = parse_scene(tube_scene(curve, first, second)).surfaces[0]
+    """Circles facing exact axes, consecutive ones parallel, antiparallel or perpendicular.
+
+    The third circle lies one unit along the second's normal: two disjoint circles in one plane
+    (or sliding sideways in it) would interpolate through a line (tests/test_lines_through_infinity.py)."""
+    third = (np.array([0.0, 0.0, 2.0]) + np.array(second)).tolist()
+    spec = parse_scene(tube_scene(curve, first, second, third=third)).surfaces[0]
     mesh = mesh_surface(spec, Resolution(around=8, along=12))
     assert np.all(np.isfinite(mesh.positions)) and np.all(np.isfinite(mesh.normals))
     np.testing.assert_allclose(np.linalg.norm(mesh.normals, axis=1), 1.0, atol=1e-12)

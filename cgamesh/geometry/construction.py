@@ -99,12 +99,25 @@ def build_surface(spec: SurfaceSpec) -> EvolvedSurface | MotorSurface:
         kind = "circle" if grade == objects.CIRCLE_GRADE else "point pair"
         raise DegenerateGeometryError(f"{spec.location}.controls: every control is the same {kind}, "
                                       "so the surface has no area")
+    if grade == objects.POINT_PAIR_GRADE:
+        _refuse_one_line(a, b, spec)
     if spec.curve == "linear" and same.any():
         # A linear segment between two equal controls is that one object: dropping the repeat
         # leaves the same surface, and no ring of the mesh is spent on a segment of no area.
         blades = blades[np.concatenate([[True], ~same])]
         curve = Linear(len(blades))
     return EvolvedSurface(spec.name, grade, blades, curve, frame)
+
+
+def _refuse_one_line(a: np.ndarray, b: np.ndarray, spec: SurfaceSpec) -> None:
+    """Point pairs whose end points (local, (n, 3) each) all lie on one line span no area: the
+    interpolation only slides them along it (and can pass through a flat point doing so)."""
+    direction = (b[0] - a[0]) / np.linalg.norm(b[0] - a[0])
+    offsets = np.concatenate([a, b]) - a[0]
+    across = offsets - np.outer(offsets @ direction, direction)
+    if np.abs(across).max() <= SAME_CONTROL_RTOL:  # the controls lie in the unit ball
+        raise DegenerateGeometryError(f"{spec.location}.controls: every point pair lies on one line, "
+                                      "so the ribbon has no area")
 
 
 def _same_as_previous(blades: np.ndarray) -> np.ndarray:

@@ -84,6 +84,24 @@ def project(interpolant: np.ndarray, derivative: np.ndarray, grade: int, size: n
     return Projection(blades, derivatives, _margin(beta, g, size))
 
 
+def project_blades(interpolant: np.ndarray, grade: int, scalar: bool = False) -> np.ndarray:
+    """The blades S X' (A, 32) of ``project`` (``project_scalar`` when ``scalar``) without their
+    derivatives, for dense scans; NaN where the projection does not exist (no warning)."""
+    g_ = (grade,)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        if scalar:
+            s = -products.geometric(interpolant, products.reverse(interpolant), g_, g_, (0,))[:, 0]
+            return interpolant / np.sqrt(s)[:, None]
+        sigma = -products.geometric(interpolant, products.reverse(interpolant), g_, g_, (0, 4))
+        s, four = sigma[:, 0], sigma * _FOUR_VECTOR
+        q = products.geometric(four, four, (4,), (4,), (0,))[:, 0]
+        beta = np.sqrt(s * s - q)
+        g = s + beta
+        projector = -four / (np.sqrt(2.0 * g) * beta)[:, None]
+        projector[:, 0] = np.sqrt(0.5 * g) / beta
+        return products.geometric(projector, interpolant, (0, 4), g_, g_)
+
+
 def margin(interpolant: np.ndarray, grade: int, size: np.ndarray, scalar: bool = False) -> np.ndarray:
     """The ``Projection.margin`` (A,) of ``project``, or of ``project_scalar`` when ``scalar``,
     without the projection itself: for dense scans."""

@@ -15,6 +15,7 @@ from typing import ClassVar, Protocol
 
 import numpy as np
 
+from cgamesh.geometry import flatness
 from cgamesh.geometry.algebra import products
 from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
 from cgamesh.geometry.algebra.layout import grade_indices
@@ -22,7 +23,8 @@ from cgamesh.geometry.curves import CurveBasis
 from cgamesh.errors import DegenerateGeometryError
 from cgamesh.geometry.frame import LocalFrame
 from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
-from cgamesh.geometry.projection import Projection, four_vector_free, margin, project, project_scalar
+from cgamesh.geometry.projection import (Projection, four_vector_free, margin, project, project_blades,
+                                        project_scalar)
 
 # The projection is refused where min(beta, g) falls below this fraction of |C'|^2: there
 # S grows like 1/sqrt(margin) and the object heads for a line, a point or nothing at all.
@@ -89,20 +91,66 @@ class EvolvedSurface:
         )
 
     def check_projection_exists(self, sampled: np.ndarray | None = None) -> None:
-        """Scan the whole curve densely and raise where the projection vanishes.
+        """Scan the whole curve densely and raise where the projection vanishes, or where the
+        projected object turns into a line or a flat point (geometry/flatness.py).
 
         sampled: increasing parameters that the caller passes to ``sample`` (which refuses
         them itself) from 0 to the end; where no step between them is longer than the scan's,
-        the scan would see nothing they do not, and is skipped.
+        the scan would see nothing they do not, and runs on them instead.
         """
         step = 1.0 / SCAN_SAMPLES_PER_SEGMENT
         if (sampled is not None and len(sampled) > 1 and sampled[0] <= 0.0
                 and sampled[-1] >= self.segment_count and np.max(np.diff(sampled)) <= step):
+            t = np.asarray(sampled, dtype=np.float64)
+            if np.all(self._margins(t) >= MIN_MARGIN):  # otherwise ``sample`` refuses them
+                self._refuse_lines(t)
             return
+        self._dense_scan
+
+    @cached_property
+    def _dense_scan(self) -> bool:
+        """The scan of ``check_projection_exists`` on its own grid, done once per surface."""
         t = np.linspace(0.0, self.segment_count, SCAN_SAMPLES_PER_SEGMENT * self.segment_count + 1)
+        self._refuse_small_margin(t, self._margins(t))
+        self._refuse_lines(t)
+        return True
+
+    def _margins(self, t: np.ndarray) -> np.ndarray:
         basis = self.curve.basis(t)
-        margins = margin(basis.value(self.controls), self.grade, basis.weight_sum(), scalar=self.four_vector_free)
-        self._refuse_small_margin(t, margins)
+        return margin(basis.value(self.controls), self.grade, basis.weight_sum(), scalar=self.four_vector_free)
+
+    def _refuse_lines(self, t: np.ndarray) -> None:
+        """DegenerateGeometryError naming the parameter interval where the interpolated object
+        turns into a line (circles) or a flat point (point pairs), and what avoids it. The
+        projection exists at t (the margins were checked); between them the refinement may
+        meet places where it does not, which count as no line (their blades are NaN)."""
+        def blades_at(at: np.ndarray) -> np.ndarray:
+            return project_blades(self.curve.basis(at).value(self.controls), self.grade, self.four_vector_free)
+
+        found = flatness.find_line(t, blades_at(t), self.grade, blades_at)
+        if found is None:
+            return
+        before, after, where, reach = found
+        segment = min(int(before), self.segment_count - 1)
+        interval = (f"between segment {segment}, alpha = {before - segment:.6g} and alpha = {after - segment:.6g} "
+                    f"(closest at alpha = {where - segment:.6g}")
+        size = "unbounded" if not reach < flatness.UNBOUNDED_REACH else f"{reach * self.frame.scale:.3g}"
+        kind = ("circle turns into a line (a circle through infinity)" if self.grade == 3
+                else "point pair has an end point at infinity (a flat point)")
+        raise DegenerateGeometryError(f"surface '{self.name}': the interpolated {kind} {interval}, "
+                                      f"{'radius' if self.grade == 3 else 'length'} {size}); {self._line_advice()}")
+
+    def _line_advice(self) -> str:
+        """What avoids a line: aligned controls where consecutive ones are opposite, else a motor
+        interpolation (circles) or a control in between."""
+        agreement = products.geometric(self.controls[:-1], self.controls[1:], (self.grade,), (self.grade,),
+                                       (0,))[:, 0]
+        opposite = np.flatnonzero(agreement < 0.0)
+        motor = ", or interpolation: motor" if self.grade == 3 else ""
+        if opposite.size:
+            return (f"controls {opposite[0]} and {opposite[0] + 1} have opposite orientations (align: false); "
+                    f"set align: true{motor}")
+        return "add a control in between" + (motor if self.grade == 3 else "")
 
     def _refuse_small_margin(self, t: np.ndarray, margin: np.ndarray) -> None:
         bad = ~(margin >= MIN_MARGIN)

@@ -26,9 +26,27 @@ from urllib.parse import unquote
 
 from cgamesh.errors import InvalidInputError
 
-# Largest file (or decoded data URI) read, in bytes: well above any mesh cgamesh writes, far
-# below what would exhaust a machine.
+# Largest file (or decoded data URI) read, in bytes, without --max-memory: well above any mesh
+# cgamesh writes, far below what would exhaust a machine.
 MAX_FILE_BYTES = 1 << 31
+
+
+def read_limit(max_memory=None) -> int:
+    """The most bytes ``check`` and ``verify`` read from one file and decode from it: the budget
+    of ``--max-memory`` when one is given (a size in bytes, a size string or a
+    cgamesh.budget.Budget; never below the FIXED_OVERHEAD every budget allows), else
+    MAX_FILE_BYTES."""
+    if max_memory is None:
+        return MAX_FILE_BYTES
+    from cgamesh.budget import FIXED_OVERHEAD, Budget
+
+    return max(Budget.of(max_memory).limit, FIXED_OVERHEAD)
+
+
+def _over(size: int, limit: int) -> str:
+    from cgamesh.budget import format_size
+
+    return f"more than the {format_size(limit)} a read may take (--max-memory)"
 
 
 class UnreadableFileError(InvalidInputError):
@@ -55,7 +73,7 @@ def check_regular(path: str | os.PathLike, limit: int = MAX_FILE_BYTES, label: s
     if not stat.S_ISREG(info.st_mode):
         raise UnreadableFileError(f"{name}: {_kind(info.st_mode)}, not a regular file")
     if info.st_size > limit:
-        raise UnreadableFileError(f"{name}: {info.st_size} bytes, more than the {limit} this reader accepts")
+        raise UnreadableFileError(f"{name}: {info.st_size} bytes, {_over(info.st_size, limit)}")
     return info.st_size
 
 
@@ -75,7 +93,7 @@ def read_regular(path: str | os.PathLike, limit: int = MAX_FILE_BYTES, label: st
         if not stat.S_ISREG(info.st_mode):
             raise UnreadableFileError(f"{label}: {_kind(info.st_mode)}, not a regular file")
         if info.st_size > limit:
-            raise UnreadableFileError(f"{label}: {info.st_size} bytes, more than the {limit} this reader accepts")
+            raise UnreadableFileError(f"{label}: {info.st_size} bytes, {_over(info.st_size, limit)}")
         chunks, total = [], 0
         while total <= info.st_size:  # one byte more than stat said: a file that grows is refused
             chunk = os.read(fd, min(info.st_size + 1 - total, 1 << 24) or 1)
@@ -98,8 +116,8 @@ def decode_data_uri(uri: str, limit: int, label: str) -> bytes:
     if not comma or not header.endswith(";base64"):
         raise UnreadableFileError(f"{label}: only base64 data URIs are read, got {uri[:40]!r}")
     if len(payload) // 4 * 3 > limit:
-        raise UnreadableFileError(f"{label}: a data URI of about {len(payload) // 4 * 3} bytes, more than the "
-                                  f"{limit} this reader accepts")
+        raise UnreadableFileError(f"{label}: a data URI of about {len(payload) // 4 * 3} bytes, "
+                                  f"{_over(len(payload) // 4 * 3, limit)}")
     try:
         return base64.b64decode(payload, validate=True)
     except (binascii.Error, ValueError):

@@ -296,7 +296,7 @@ class GltfFile:
     def _allocate(self, size: int, here: str) -> None:
         self._allocated += size
         if self._allocated > self.limit:
-            self.fail(f"reading {here} would take the arrays past {self.limit} bytes; refused")
+            self.fail(f"reading {here} would take the arrays past {self.limit} bytes (--max-memory); refused")
 
     def _check_bounds(self, accessor: dict, here: str, values: np.ndarray, width: int) -> None:
         """Declared min / max (raw component values) against the data's, where declared."""

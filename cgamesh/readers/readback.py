@@ -185,7 +185,7 @@ def expand_usd_mesh(mesh, name: str = "", budget: list[int] | None = None,
     sizes = [0 if array is None else len(array) for array in (points, counts, indices)]
     if budget is not None and (3 * sizes[0] + sizes[1] + 9 * sizes[2]) * 8 > budget[0]:
         raise UnreadableFileError(f"{where}: {sizes[0]} points, {sizes[1]} faces and {sizes[2]} indices would take "
-                                  "the arrays past the reader's limit; refused")
+                                  "the arrays past the reader's limit (--max-memory); refused")
     points = np.zeros((0, 3)) if points is None else np.asarray(points, dtype=np.float64).reshape(-1, 3)
     counts = np.zeros(0, dtype=np.int64) if counts is None else np.asarray(counts, dtype=np.int64).ravel()
     indices = np.zeros(0, dtype=np.int64) if indices is None else np.asarray(indices, dtype=np.int64).ravel()
@@ -202,7 +202,7 @@ def expand_usd_mesh(mesh, name: str = "", budget: list[int] | None = None,
     if budget is not None:
         budget[0] -= len(indices) * 8 * 8  # points, normals and st per corner
         if budget[0] < 0:
-            raise UnreadableFileError(f"{where}: its corners would take the arrays past the reader's limit; refused")
+            raise UnreadableFileError(f"{where}: its corners would take the arrays past the reader's limit (--max-memory); refused")
     primvars = UsdGeom.PrimvarsAPI(mesh.GetPrim())
     out = {"points": points[indices]}
     counted = {UsdGeom.Tokens.vertex: len(points), UsdGeom.Tokens.faceVarying: len(indices),
@@ -231,7 +231,7 @@ def expand_usd_mesh(mesh, name: str = "", budget: list[int] | None = None,
                 budget[0] -= len(indices) * width * 8
                 if budget[0] < 0:
                     raise UnreadableFileError(f"{where}: primvars:{key} would take the arrays past the reader's "
-                                              "limit; refused")
+                                              "limit (--max-memory); refused")
             out[label] = _corner_values(primvar, key, width, indices, counted, where)
     return out
 

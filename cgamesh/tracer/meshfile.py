@@ -30,13 +30,14 @@ class MeshData:
     double_sided: bool
 
 
-def read_glb(path: str | os.PathLike, up: str, meters_per_unit: float) -> list[MeshData]:
+def read_glb(path: str | os.PathLike, up: str, meters_per_unit: float, limit: int | None = None) -> list[MeshData]:
     """Every mesh instance of the file (one per node with a mesh), named after its mesh.
 
     The file is read by ``readers.gltf_reader`` (nothing it declares is trusted); a primitive
     without normals, or with a zero-length normal, cannot be traced along and is refused.
+    ``limit``: the most bytes read and decoded (readers.files.read_limit; None for its default).
     """
-    reader = GltfFile(path)
+    reader = GltfFile(path) if limit is None else GltfFile(path, limit)
     meshes = []
     for instance in reader.instances():
         parts, offset, double_sided = [], 0, False
