@@ -59,6 +59,13 @@ def trig_basis_derivative(theta: np.ndarray) -> np.ndarray:
 # Block size (in float64 values) of per-vertex temporaries: about 1 MB, within a core's L2 cache.
 _SCRATCH_VALUES = 1 << 17
 _FIT = np.linalg.inv(trig_basis(SAMPLE_ANGLES))  # samples -> coefficients, exact for degree <= 3
+# zeta = x' . n is of degree 2 in theta (module docstring). Rounding noise in the sampled
+# velocities gives its seven samples a spurious degree-3 part; times e_r (degree 1) that is of
+# degree 4, which seven samples alias back onto degree 3, so the fitted N would leave the
+# circle's normal plane (span of e_r and n) between the samples where N is small. Projecting
+# the samples onto degree <= 2 (zeroing the cos 3t, sin 3t coefficients) keeps N in that plane
+# at every angle, and changes nothing when the samples are exact.
+_ZETA_DEGREE_2 = trig_basis(SAMPLE_ANGLES) @ np.diag([1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0]) @ _FIT
 # |d/dtheta| of a coefficient's basis function is at most its frequency.
 _FREQUENCY = np.concatenate([[0.0], np.repeat(np.arange(1, TRIG_DEGREE + 1), 2)])
 
@@ -77,7 +84,7 @@ def fit(samples: np.ndarray) -> np.ndarray:
 
 def frame_coordinates(velocity: np.ndarray, radial: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """(zeta, rho) (K, 7, 2): velocity (K, 7, 3) along the circle's normal and along e_r."""
-    zeta = np.einsum("ksi,ki->ks", velocity, normal)
+    zeta = np.einsum("ksi,ki->ks", velocity, normal) @ _ZETA_DEGREE_2.T
     rho = np.einsum("ksi,ksi->ks", velocity, radial)
     return np.stack([zeta, rho], axis=-1)
 
