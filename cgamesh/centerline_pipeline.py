@@ -288,7 +288,7 @@ def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segm
         from cgamesh.meshing.colors import direction_colors
 
         along_t = np.stack([np.interp(s, grid, t[:, k]) for k in range(3)], axis=1)
-        colors = direction_colors(along_t / np.linalg.norm(along_t, axis=1, keepdims=True))
+        colors = direction_colors(along_t)  # any length; a zero one (a turn back) gets NAN_COLOR
     return _with(mesh, name=f"{stem}_{_label_name(chain.label)}", attributes=attributes, colors=colors)
 
 

@@ -145,7 +145,9 @@ def unit_normals(coefficients: np.ndarray, theta: np.ndarray, speed: np.ndarray,
             near_columns.append(column)
             _limit_at_zeros(values, lengths, close, coefficients[start:stop], theta, speed[start:stop])
             smallest[start:stop] = lengths.min(axis=1)
-        np.divide(1.0, lengths, out=lengths)
+        # |N| = 0 that survives the limit (N and dN/dtheta both zero: a ring that stands still, a
+        # cusp) is among the ``near`` returned; its unit stays zero for the caller to replace.
+        np.divide(1.0, lengths, out=lengths, where=lengths > 0.0)
         for component in range(3):
             np.multiply(values[component], lengths, out=unit[start:stop, :, component])
     near = (np.concatenate(near_rings), np.concatenate(near_columns)) if near_rings else (

@@ -193,7 +193,7 @@ def _chain_meshes(members, result: TubeArrays, first, count, radii, t, scalar, n
         from cgamesh.meshing.colors import direction_colors
 
         along_t = np.stack([_interp(t[:, k], first, count, global_chain, s) for k in range(3)], axis=1)
-        colors = direction_colors(along_t / np.linalg.norm(along_t, axis=1, keepdims=True))
+        colors = direction_colors(along_t)  # any length; a zero one (a turn back) gets NAN_COLOR
     vertex_counts = np.bincount(result.vertex_chain, minlength=len(members))
     face_counts = np.bincount(result.face_chain, minlength=len(members))
     v_start = np.concatenate([[0], np.cumsum(vertex_counts)])

@@ -194,7 +194,9 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
 
     # circles._outward_sum: the seven-sample estimate, or the sum over every vertex
     cosine = field.frame[..., 0] @ normal_field.trig_basis(normal_field.SAMPLE_ANGLES).T
-    cosine = cosine / np.linalg.norm(field.sample_normals, axis=-1)
+    sample_lengths = np.linalg.norm(field.sample_normals, axis=-1)
+    # a zero sample normal is on a stationary ring, whose chain went to the per-chain path above
+    cosine = np.divide(cosine, sample_lengths, out=np.zeros_like(cosine), where=sample_lengths > 0.0)
     estimate = np.bincount(ring_chain, weights=cosine.mean(axis=1) * rings.radius, minlength=chains)
     radius_sum = np.bincount(ring_chain, weights=rings.radius, minlength=chains)
     trusted = ~examined & (np.abs(estimate) >= OUTWARD_TRUST * radius_sum)
