@@ -173,3 +173,21 @@ def test_benchmark_runs_at_tiny_size():
                              "--neurons", "1"], capture_output=True, text=True, timeout=900)
     assert result.returncode == 0, result.stderr[-2000:]
     assert "Spline+tube" in result.stdout and "CPU" in result.stdout and "per-surface overhead" in result.stdout
+
+
+@pytest.mark.parametrize("split", [False, True])
+def test_a_turn_back_meshes_without_warnings_or_non_finite_values(split):
+    """Found by a random search of the property above: a polyline that turns straight back
+    (0 -> 1 -> 0) has a ring that stands still and a node tangent interpolated through zero;
+    both used to go through a division by zero (numpy warnings on the command line)."""
+    import warnings
+
+    import cgamesh
+
+    points = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.3], [0.0, 0.0, 0.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        meshes = cgamesh.tubes([points], radii=0.05, around=6, subdivide=2, color_by="direction", split=split)
+    for name in ("positions", "normals", "uvs", "colors"):
+        assert np.isfinite(getattr(meshes, name)).all(), name
+    np.testing.assert_allclose(np.linalg.norm(meshes.normals, axis=1), 1.0, atol=1e-12)
