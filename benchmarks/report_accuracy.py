@@ -263,6 +263,8 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path("docs"))
     parser.add_argument("--small", action="store_true", help="fewer sizes (for CI)")
     parser.add_argument("--examples", default="", help="comma-separated example stems (default: all)")
+    parser.add_argument("--compare-only", action="store_true",
+                        help="only the table against the smallest uniform grids (printed, nothing written)")
     args = parser.parse_args()
     sizes = (8, 16, 32) if args.small else (8, 16, 32, 64, 128, 256)
     tolerances = (1e-1, 1e-2) if args.small else (1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4)
@@ -277,6 +279,10 @@ def main() -> None:
             continue
         for spec in load_scene(path).surfaces:
             name = f"{path.stem}/{spec.name}"
+            if args.compare_only:
+                comparisons.extend(compare_with_uniform(name, spec, compared))
+                print(comparison_table(comparisons[-len(compared):]), flush=True)
+                continue
             rows = measure_surface(name, spec, sizes, tolerances)
             plot(rows, figures / f"accuracy_{path.stem}_{spec.name}.png")
             all_rows.extend(rows)
@@ -286,6 +292,9 @@ def main() -> None:
                 break
         if args.small and all_rows:
             break
+    if args.compare_only:
+        print(comparison_table(comparisons))
+        return
     finders, finder_figures = root_finders(args.small)
     plot_root_finders(finder_figures, figures / "root_finders.png")
 

@@ -328,14 +328,35 @@ def _plan(family: _Surface, tolerance: float) -> tuple[_Cells, int, np.ndarray, 
     return cells, around, density, counts
 
 
+class PreparedPlan:
+    """A tolerance's counts, chosen from the sampled bounds, before any ring is placed.
+
+    ``counts`` is what a resource budget prices (nothing mesh-sized is allocated yet); ``place()``
+    then places the rings from the same cells, so a run that is priced is planned once."""
+
+    def __init__(self, surface: EvolvedSurface, tolerance: float, kind: str = "circles", closed: bool = False):
+        self.surface, self.tolerance, self.kind, self.closed = surface, tolerance, kind, closed
+        self._family = _Surface(surface, kind, closed)
+        self._cells, self._around, self._density, self._counts = _plan(self._family, tolerance)
+        self._placed: TolerancePlan | None = None
+
+    @property
+    def counts(self) -> PlannedCounts:
+        return PlannedCounts(self._around, int(self._counts.sum()) + 1)
+
+    def place(self) -> TolerancePlan:
+        if self._placed is None:
+            self._placed = _place_rings(self._family, self._cells, self._around, self._density, self._counts,
+                                        self.tolerance)
+        return self._placed
+
+
 def plan_counts(surface: EvolvedSurface, tolerance: float, kind: str = "circles", closed: bool = False) -> PlannedCounts:
     """The counts around (across) and along that ``plan_tolerance`` would choose, before placing
     any ring: reads the surface at a few hundred parameters and allocates nothing mesh-sized.
     (The final ring count can exceed this estimate by the few rings the placement adds where an
     interval's bound misses.) Vertices scale about as 1 / tolerance."""
-    family = _Surface(surface, kind, closed)
-    _, around, _, counts = _plan(family, tolerance)
-    return PlannedCounts(around, int(counts.sum()) + 1)
+    return PreparedPlan(surface, tolerance, kind, closed).counts
 
 
 def plan_tolerance(surface: EvolvedSurface, tolerance: float, kind: str = "circles", closed: bool = False) -> TolerancePlan:
@@ -344,8 +365,13 @@ def plan_tolerance(surface: EvolvedSurface, tolerance: float, kind: str = "circl
     kind: "circles" or "point_pairs". Raises InvalidInputError for a tolerance that is not a
     positive finite number or would need more than MAX_AROUND around or MAX_RINGS rings.
     """
-    family = _Surface(surface, kind, closed)
-    cells, around, density, counts = _plan(family, tolerance)
+    return PreparedPlan(surface, tolerance, kind, closed).place()
+
+
+def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarray, counts: np.ndarray,
+                 tolerance: float) -> TolerancePlan:
+    """Rings equidistributing ``density``, raised where an interval's bound misses (see the module doc)."""
+    surface, kind, closed = family.surface, family.kind, family.closed
     names = sorted(cells.terms)
     table = _RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1))
     t = None
@@ -398,7 +424,11 @@ def _split_missed(family, cells, table, names, t, around, tolerance):
             raise InvalidInputError(
                 f"tolerance {tolerance:.3g} is too small for surface '{family.surface.name}': "
                 f"it needs more than {MAX_RINGS} rings")
-        inserted = [t[k] + h[i] * np.arange(1, int(parts[i])) / parts[i] for i, k in enumerate(missed)]
-        t = np.sort(np.concatenate([t] + inserted))
+        # parts[i] - 1 new rings inside interval missed[i], evenly spaced: one array, no loop.
+        extra = (parts - 1.0).astype(np.int64)
+        owner = np.repeat(np.arange(len(missed)), extra)
+        step = np.arange(extra.sum()) - np.repeat(np.cumsum(extra) - extra, extra) + 1
+        inserted = t[missed][owner] + h[owner] * step / parts[owner]
+        t = np.sort(np.concatenate([t, inserted]))
     raise InvalidInputError(f"tolerance {tolerance:.3g}: no ring placement meets it for surface "
                             f"'{family.surface.name}'")
