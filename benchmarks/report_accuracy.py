@@ -15,7 +15,9 @@
 
 It writes docs/accuracy.md (the tables), docs/figures/accuracy_<example>_<surface>.png
 (deviation and time against vertex count) and docs/figures/root_finders.png, and prints the
-tables. --small measures fewer sizes and one example, for CI; --examples a,b only those.
+tables. --small measures fewer sizes and one example, for CI; --examples a,b only those;
+--compare-only measures only the comparison with the smallest uniform grids and replaces that
+table in an existing docs/accuracy.md.
 """
 
 from __future__ import annotations
@@ -178,6 +180,22 @@ def comparison_table(rows: list[Comparison]) -> str:
     return "\n".join(lines)
 
 
+COMPARISON_HEADING = "## Tolerance against the smallest uniform grid"
+
+
+def write_comparison(path: Path, against: str) -> None:
+    """Replace the table of the comparison section of an existing report (--compare-only)."""
+    text = path.read_text()
+    start = text.index(COMPARISON_HEADING)
+    table_start = text.index("| surface | tolerance |", start)
+    table_end = text.index("\n## ", table_start)
+    note = ("(This table: `python benchmarks/report_accuracy.py --compare-only --out docs`, every example; "
+            "the sections below come from the last full run.)\n\n")
+    if "--compare-only" in text[start:table_start]:
+        note = ""
+    path.write_text(text[:table_start] + note + against + "\n" + text[table_end:])
+
+
 def root_finders(small: bool) -> tuple[str, dict]:
     """The sampled-versus-polynomial table (markdown) and its figures, on the fig. 17 scene."""
     import sys
@@ -293,7 +311,9 @@ def main() -> None:
         if args.small and all_rows:
             break
     if args.compare_only:
-        print(comparison_table(comparisons))
+        against = comparison_table(comparisons)
+        print(against)
+        write_comparison(args.out / "accuracy.md", against)
         return
     finders, finder_figures = root_finders(args.small)
     plot_root_finders(finder_figures, figures / "root_finders.png")

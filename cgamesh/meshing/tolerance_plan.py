@@ -12,7 +12,10 @@ straight rulings), A bounds |d^2 x / dt^2| and B |d^2 x / dt dtheta| over the qu
 term) and k' the chord's length per unit of r (2 sin(pi / M)) or the fraction across (1 / (N - 1)).
 A and B come from bounds of the members' derivatives per cell of a dense sampling
 (cgamesh.meshing.derivative_bounds): for circles |c''|, |r'|, |r''|, |n'|, |n''| and the
-frame's angular velocity; for ribbons |a''|, |b''| and |(b - a)'|.
+frame's angular velocity; for ribbons |a''|, |b''| and |(b - a)'|. For circles a second bound
+counts only the twist's part across the surface (a reparametrisation of each triangle removes
+its shear along P_t and P_theta; docs/tolerance.md, "The twist's normal part"): an interval's E
+is the smaller of the two.
 
 From these, per cell and for each candidate count around, the spacing h whose bound meets the
 tolerance gives a ring density 1 / h; its integral per segment is the ring count, so the count
