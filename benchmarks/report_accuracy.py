@@ -15,7 +15,9 @@
 
 It writes docs/accuracy.md (the tables), docs/figures/accuracy_<example>_<surface>.png
 (deviation and time against vertex count) and docs/figures/root_finders.png, and prints the
-tables. --small measures fewer sizes and one example, for CI; --examples a,b only those.
+tables. --small measures fewer sizes and one example, for CI; --examples a,b only those;
+--compare-only measures only the comparison with the smallest uniform grids and replaces that
+table in an existing docs/accuracy.md.
 """
 
 from __future__ import annotations
@@ -178,6 +180,22 @@ def comparison_table(rows: list[Comparison]) -> str:
     return "\n".join(lines)
 
 
+COMPARISON_HEADING = "## Tolerance against the smallest uniform grid"
+
+
+def write_comparison(path: Path, against: str) -> None:
+    """Replace the table of the comparison section of an existing report (--compare-only)."""
+    text = path.read_text()
+    start = text.index(COMPARISON_HEADING)
+    table_start = text.index("| surface | tolerance |", start)
+    table_end = text.index("\n## ", table_start)
+    note = ("(This table: `python benchmarks/report_accuracy.py --compare-only --out docs`, every example; "
+            "the sections below come from the last full run.)\n\n")
+    if "--compare-only" in text[start:table_start]:
+        note = ""
+    path.write_text(text[:table_start] + note + against + "\n" + text[table_end:])
+
+
 def root_finders(small: bool) -> tuple[str, dict]:
     """The sampled-versus-polynomial table (markdown) and its figures, on the fig. 17 scene."""
     import sys
@@ -263,6 +281,8 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path("docs"))
     parser.add_argument("--small", action="store_true", help="fewer sizes (for CI)")
     parser.add_argument("--examples", default="", help="comma-separated example stems (default: all)")
+    parser.add_argument("--compare-only", action="store_true",
+                        help="only the table against the smallest uniform grids (printed, nothing written)")
     args = parser.parse_args()
     sizes = (8, 16, 32) if args.small else (8, 16, 32, 64, 128, 256)
     tolerances = (1e-1, 1e-2) if args.small else (1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4)
@@ -277,6 +297,10 @@ def main() -> None:
             continue
         for spec in load_scene(path).surfaces:
             name = f"{path.stem}/{spec.name}"
+            if args.compare_only:
+                comparisons.extend(compare_with_uniform(name, spec, compared))
+                print(comparison_table(comparisons[-len(compared):]), flush=True)
+                continue
             rows = measure_surface(name, spec, sizes, tolerances)
             plot(rows, figures / f"accuracy_{path.stem}_{spec.name}.png")
             all_rows.extend(rows)
@@ -286,6 +310,11 @@ def main() -> None:
                 break
         if args.small and all_rows:
             break
+    if args.compare_only:
+        against = comparison_table(comparisons)
+        print(against)
+        write_comparison(args.out / "accuracy.md", against)
+        return
     finders, finder_figures = root_finders(args.small)
     plot_root_finders(finder_figures, figures / "root_finders.png")
 

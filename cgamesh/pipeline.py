@@ -75,6 +75,7 @@ class SurfacePlan:
     peak: int
     where: str
     what: str
+    prepared: object = None  # a tolerance's PreparedPlan, priced here and placed by mesh_planned
 
 
 def plan_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tangents: bool = False) -> SurfacePlan:
@@ -111,7 +112,7 @@ def plan_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
         raise type(error)(f"{spec.location}: {error}") from None
     held = costs.HELD_PER_VERTEX * cost.vertices
     return SurfacePlan(spec, surface, None, None, tolerance, cost.vertices, held, max(cost.bytes, held), where,
-                       f"meshing to tolerance (about {cost.around + 1} x {cost.along} vertices)")
+                       f"meshing to tolerance (about {cost.around + 1} x {cost.along} vertices)", cost.plan)
 
 
 def mesh_planned(plan: SurfacePlan, tangents: bool) -> SurfaceMesh:
@@ -120,10 +121,11 @@ def mesh_planned(plan: SurfacePlan, tangents: bool) -> SurfaceMesh:
     try:
         if spec.type == "point_pairs":  # caps are circles only (the scene loader refuses them here)
             if tolerance is not None:
-                return ribbon_to_tolerance(surface, tolerance, closed=spec.closed)
+                return ribbon_to_tolerance(surface, tolerance, closed=spec.closed, prepared=plan.prepared)
             return mesh_ribbon_surface(surface, around, along, closed=spec.closed)
         if tolerance is not None:
-            return mesh_to_tolerance(surface, tolerance, caps=spec.caps, closed=spec.closed, tangents=tangents)
+            return mesh_to_tolerance(surface, tolerance, caps=spec.caps, closed=spec.closed, tangents=tangents,
+                                     prepared=plan.prepared)
         return mesh_circle_surface(surface, around, along, caps=spec.caps, closed=spec.closed,
                                    with_tangents=tangents, distinct=True)
     except CgameshError as error:

@@ -18,18 +18,28 @@ from cgamesh.meshing.circles import DISTINCT_RING_FRACTION, distinct_rings, mesh
 from cgamesh.meshing.deviation import circle_read_out
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.ribbons import mesh_ribbon_surface
-from cgamesh.meshing.tolerance_plan import plan_tolerance
+from cgamesh.meshing.tolerance_plan import PreparedPlan, TolerancePlan
+
+
+def _plan(surface: EvolvedSurface, tolerance: float, kind: str, closed: bool,
+          prepared: PreparedPlan | None) -> TolerancePlan:
+    """The rings of ``prepared`` (the plan a budget priced: planned once), or planned here."""
+    if prepared is None:
+        surface.check_projection_exists()
+        prepared = PreparedPlan(surface, tolerance, kind, closed)
+    return prepared.place()
 
 
 def mesh_to_tolerance(surface: EvolvedSurface, tolerance: float, caps: bool = False,
-                      closed: bool = False, tangents: bool = False) -> SurfaceMesh:
+                      closed: bool = False, tangents: bool = False,
+                      prepared: PreparedPlan | None = None) -> SurfaceMesh:
     """The mesh of a circle surface whose deviation from it is at most ``tolerance``.
 
     Its ``max_deviation`` holds the plan's upper bound of the deviation (<= tolerance).
-    Caps are exact flat discs and add nothing to it.
+    Caps are exact flat discs and add nothing to it. ``prepared``: the plan already made for
+    this surface and tolerance (by the resource budget, which checked its projection).
     """
-    surface.check_projection_exists()
-    plan = plan_tolerance(surface, tolerance, "circles", closed)
+    plan = _plan(surface, tolerance, "circles", closed, prepared)
     rings, bound = plan.t, plan.bound
     distinct = distinct_rings(*circle_read_out(surface, rings), surface.frame.scale, surface.name)
     if not distinct.all():
@@ -42,8 +52,9 @@ def mesh_to_tolerance(surface: EvolvedSurface, tolerance: float, caps: bool = Fa
     return replace(mesh, max_deviation=bound)
 
 
-def ribbon_to_tolerance(surface: EvolvedSurface, tolerance: float, closed: bool = False) -> SurfaceMesh:
+def ribbon_to_tolerance(surface: EvolvedSurface, tolerance: float, closed: bool = False,
+                        prepared: PreparedPlan | None = None) -> SurfaceMesh:
     """The mesh of a point-pair surface within ``tolerance`` of it; ``max_deviation`` as above."""
-    plan = plan_tolerance(surface, tolerance, "point_pairs", closed)
+    plan = _plan(surface, tolerance, "point_pairs", closed, prepared)
     mesh = mesh_ribbon_surface(surface, plan.around, t=plan.t, closed=closed)
     return replace(mesh, max_deviation=plan.bound)

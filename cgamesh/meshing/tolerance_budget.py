@@ -7,9 +7,11 @@ refused in one line instead of growing until memory runs out (cgamesh.budget).
   the ball its controls' circles or end points fit in), or below FLOAT_SPACING_FACTOR float64
   spacings of its coordinates, asks for more than float64 vertices can show; it is refused.
 - Size: the counts around (across) and along come from the tolerance's own a priori plan
-  (``tolerance_plan.plan_counts``: the bounds that will place the rings, read at a few
+  (``tolerance_plan.PreparedPlan``: the bounds that will place the rings, read at a few
   hundred parameters, nothing mesh-sized), so the price is that of the mesh the run will make,
   with RINGS_MARGIN for the few rings the placement adds where an interval's bound misses.
+  The prepared plan is kept with the price and places the rings when the run meshes: the
+  surface is planned once.
 - Memory: that mesh's keeping and meshing peak (cgamesh.budget.surface_bytes) plus the plan's
   own tables (RUN_OVERHEAD).
 """
@@ -17,7 +19,7 @@ refused in one line instead of growing until memory runs out (cgamesh.budget).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -35,6 +37,7 @@ class ToleranceCost:
     around: int  # vertices around (or across) each ring
     along: int  # rings (rulings), estimated
     bytes: int  # peak memory, estimated
+    plan: object = field(default=None, compare=False, repr=False)  # the PreparedPlan priced
 
     @property
     def vertices(self) -> int:
@@ -55,10 +58,11 @@ def tolerance_floor(surface: EvolvedSurface) -> float:
 
 def estimate(surface: EvolvedSurface, tolerance: float, closed: bool = False) -> ToleranceCost:
     """The a priori size and memory of meshing ``surface`` to ``tolerance`` (see the module doc)."""
-    from cgamesh.meshing.tolerance_plan import plan_counts
+    from cgamesh.meshing.tolerance_plan import PreparedPlan
 
     kind = "circles" if surface.grade == 3 else "point_pairs"
-    counts = plan_counts(surface, tolerance, kind, closed)
+    prepared = PreparedPlan(surface, tolerance, kind, closed)
+    counts = prepared.counts
     along = max(2, math.ceil(counts.rings * RINGS_MARGIN))
     _, peak = costs.surface_bytes(kind, counts.around, along)
-    return ToleranceCost(counts.around, along, peak + RUN_OVERHEAD)
+    return ToleranceCost(counts.around, along, peak + RUN_OVERHEAD, prepared)

@@ -12,7 +12,10 @@ straight rulings), A bounds |d^2 x / dt^2| and B |d^2 x / dt dtheta| over the qu
 term) and k' the chord's length per unit of r (2 sin(pi / M)) or the fraction across (1 / (N - 1)).
 A and B come from bounds of the members' derivatives per cell of a dense sampling
 (cgamesh.meshing.derivative_bounds): for circles |c''|, |r'|, |r''|, |n'|, |n''| and the
-frame's angular velocity; for ribbons |a''|, |b''| and |(b - a)'|.
+frame's angular velocity; for ribbons |a''|, |b''| and |(b - a)'|. For circles a second bound
+counts only the twist's part across the surface (a reparametrisation of each triangle removes
+its shear along P_t and P_theta; docs/tolerance.md, "The twist's normal part"): an interval's E
+is the smaller of the two.
 
 From these, per cell and for each candidate count around, the spacing h whose bound meets the
 tolerance gives a ring density 1 / h; its integral per segment is the ring count, so the count
@@ -130,13 +133,43 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
     bb, cc, bc = np.sum(b1 * b1, -1), np.sum(c1 * c1, -1), np.sum(b1 * c1, -1)
     largest = np.sqrt(0.5 * (bb + cc) + np.sqrt(0.25 * (bb - cc) ** 2 + bc * bc))
     twist = largest + np.hypot(norm(cosine.first_radius), norm(sine.first_radius))
-    terms = dict(A=scale * along, B=scale * twist, Rm=scale * r0, N1=n1, N2=n2)
-    return _Cells(cells, terms, _holonomy(normal, t.ravel()) / surface.segment_count if closed else 0.0)
+    # The frame's part of d2x/dt2 alone, max over theta of |(r u)'' cos + (r v)'' sin|: the larger
+    # singular value of [(r u)'', (r v)''] (the twist's change along t, for the normal twist bound).
+    b2, c2 = cosine.second, sine.second
+    bb, cc, bc = np.sum(b2 * b2, -1), np.sum(c2 * c2, -1), np.sum(b2 * c2, -1)
+    turning = (np.sqrt(0.5 * (bb + cc) + np.sqrt(0.25 * (bb - cc) ** 2 + bc * bc))
+               + np.hypot(norm(cosine.second_radius), norm(sine.second_radius)))
+    axial, across = _axial_speed(grid(normal), path, n1)
+    _, r1, _ = cell_bounds(grid(radius[:, None]))
+    sampled = grid(radius)
+    least = np.maximum(np.minimum(sampled[:, :-1], sampled[:, 1:]) - 0.5 * r1 / cells, 0.0)  # <= r in the cell
+    terms = dict(A=scale * along, B=scale * twist, Rm=scale * r0, N1=n1, N2=n2, Ar=scale * turning,
+                 R1=scale * r1, Cx=scale * across, negCn=-scale * axial, negRmin=-scale * least)
+    return _Cells(cells, terms, _turn(u, normal) / surface.segment_count if closed else 0.0)
+
+
+def _axial_speed(normal: np.ndarray, path, n1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per cell: a lower bound of |n . c'| and an upper bound of |n x c'| (the centre's speed along
+    and across the circle's axis). In a cell, c' is within its radius of the divided difference D1
+    and n within delta |n'| of its value at the cell's start."""
+    norm = lambda x: np.sqrt(np.sum(x * x, axis=-1))  # noqa: E731
+    start, d1 = normal[:, :-1], path.first
+    spread = norm(path.first_radius)
+    delta = 1.0 / d1.shape[1]
+    slack = delta * n1 * (norm(d1) + spread) + spread
+    along = np.abs(np.sum(start * d1, axis=-1))
+    across = norm(np.cross(start, d1))
+    return np.maximum(along - slack, 0.0), across + slack
 
 
 def _holonomy(normal: np.ndarray, t: np.ndarray) -> float:
     """|angle| by which transport around a closed loop of these normals turns its frame."""
     u, _ = transported_frames(normal, False, t)
+    return _turn(u, normal)
+
+
+def _turn(u: np.ndarray, normal: np.ndarray) -> float:
+    """|angle| between the first and the last of transported axes u (the loop's holonomy)."""
     return abs(float(np.arctan2(np.dot(np.cross(u[0], u[-1]), normal[0]), np.dot(u[0], u[-1]))))
 
 
@@ -166,8 +199,52 @@ def _circle_error(terms: dict, h, around, rate: float):
         spin_rate = turned * n2 / q + (turned * n1 / q) ** 2
         a = terms["A"] + 2.0 * terms["B"] * spin + rm * (spin * spin + spin_rate)
         b = terms["B"] + rm * spin
-        error = rm * (1.0 - np.cos(np.pi / around)) + a * h * h / 8.0 + b * h * np.sin(np.pi / around) / 2.0
+        sag = rm * (1.0 - np.cos(np.pi / around))
+        error = sag + a * h * h / 8.0 + b * h * np.sin(np.pi / around) / 2.0
+        error = np.minimum(error, sag + _normal_twist_error(terms, h, around, a, b, spin, spin_rate))
     return np.where(turned < 1.0, error, np.inf)
+
+
+def _normal_twist_error(terms: dict, h, around, a, b, spin, spin_rate):
+    """The bound of the quad's error without the twist's tangential part (see _normal_twist_terms)."""
+    square, linear, valid = _normal_twist_terms(terms, around, a, b, spin, spin_rate)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        valid = valid & (h * terms["R1"] <= -terms["negRmin"])  # h |gamma_theta| <= 1
+    return np.where(valid, square * h * h + linear * h, np.inf)
+
+
+def _normal_twist_terms(terms: dict, around, a, b, spin, spin_rate):
+    """(square, linear, valid): A^ h^2 / 8 + B^ h k / 4 + C^ k^2 / 8 = square h^2 + linear h for the
+    map g = P(Phi), where Phi moves each triangle's points by h k gamma lambda_i lambda_j (the
+    bubble of its diagonal, zero at the vertices; it stays in the quad while k |gamma_t| <= 1 and
+    h |gamma_theta| <= 1), so that the twist of g is P_t theta - gamma_t P_t - gamma_theta P_theta:
+    the shear along the ring's axis and around it removed (docs/tolerance.md, "The twist's
+    normal part"). a, b: the full bounds of |P_tt| and |P_t theta| / |L'|; spin, spin_rate: the
+    mesh frame's |psi'|, |psi''|. valid is False where the centre does not move along the axis
+    enough (or the radius changes too fast) for the shear to be removed."""
+    rm, n1 = terms["Rm"], terms["N1"]
+    k = 2.0 * np.pi / around
+    chord = 2.0 * np.sin(np.pi / around) / k  # |L'|
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        axial = -terms["negCn"] - rm * n1  # <= |n . P_t|
+        gamma = rm * n1 / axial * chord  # >= |gamma_t|
+        shear = terms["R1"] / -terms["negRmin"]  # >= |gamma_theta| = |r'| / r
+        tilt = np.minimum(1.0, (terms["Cx"] + terms["R1"] + rm * spin) / axial)  # >= |n x P_t| / |P_t|
+        rest = rm * spin + rm * n1 * tilt  # >= |P_t theta - gamma . J| / |L'| where gamma is chosen
+        turning = terms["Ar"] + 2.0 * terms["B"] * spin + rm * (spin * spin + spin_rate)  # >= |(r F)''|
+        twist = chord * b  # >= |P_t theta|
+        a_hat = (1.0 + k * gamma) ** 2 * a + 2.0 * (1.0 + k * gamma) * k * shear * twist
+        # B^ = B0 + h B1 (B0: the twist left at the quad's middle; B1: its change over the quad and
+        # what Phi's slopes add); C^ = h C1 + h^2 C2.
+        b0 = chord * rest + 1.5 * k * gamma * twist
+        b1 = (0.5 * chord * turning + 0.5 * gamma * a + 1.5 * shear * twist + 2.0 * k * gamma * shear * twist
+              + (1.0 + k * gamma) * gamma * a)
+        c1 = 2.0 * gamma * twist
+        c2 = gamma * gamma * a + 2.0 * gamma * shear * twist
+        square = a_hat / 8.0 + k / 4.0 * b1 + k * k / 8.0 * c2
+        linear = k / 4.0 * b0 + k * k / 8.0 * c1
+        valid = (axial > 0.0) & (k * gamma <= 1.0) & np.isfinite(shear) & np.isfinite(square) & np.isfinite(linear)
+    return square, linear, valid
 
 
 def _ribbon_error(terms: dict, h, across, rate: float = 0.0):
@@ -176,10 +253,16 @@ def _ribbon_error(terms: dict, h, across, rate: float = 0.0):
 
 def _circle_spacing(terms: dict, around, tolerance: float, rate: float):
     """Per cell (and candidate M) the spacing h meeting the tolerance, leading terms only."""
-    a = (terms["A"] + 2.0 * terms["B"] * rate + terms["Rm"] * rate * rate) / 8.0
-    b = (terms["B"] + terms["Rm"] * rate) * np.sin(np.pi / around) / 2.0
-    c = tolerance - terms["Rm"] * (1.0 - np.cos(np.pi / around))
-    return _root(a, b, c)
+    rm = terms["Rm"]
+    full = terms["A"] + 2.0 * terms["B"] * rate + rm * rate * rate
+    twist = terms["B"] + rm * rate
+    c = tolerance - rm * (1.0 - np.cos(np.pi / around))
+    spacing = _root(full / 8.0, twist * np.sin(np.pi / around) / 2.0, c)
+    # The normal twist bound with its leading terms (spin = rate, no spin rate); its condition
+    # h |gamma_theta| <= 1 is checked when the rings are bounded.
+    square, linear, valid = _normal_twist_terms(terms, around, full, twist, rate, 0.0)
+    normal = np.where(valid, _root(np.where(valid, square, 1.0), np.where(valid, linear, 1.0), c), 0.0)
+    return np.maximum(spacing, normal)
 
 
 def _ribbon_spacing(terms: dict, across, tolerance: float, rate: float = 0.0):
@@ -328,14 +411,35 @@ def _plan(family: _Surface, tolerance: float) -> tuple[_Cells, int, np.ndarray, 
     return cells, around, density, counts
 
 
+class PreparedPlan:
+    """A tolerance's counts, chosen from the sampled bounds, before any ring is placed.
+
+    ``counts`` is what a resource budget prices (nothing mesh-sized is allocated yet); ``place()``
+    then places the rings from the same cells, so a run that is priced is planned once."""
+
+    def __init__(self, surface: EvolvedSurface, tolerance: float, kind: str = "circles", closed: bool = False):
+        self.surface, self.tolerance, self.kind, self.closed = surface, tolerance, kind, closed
+        self._family = _Surface(surface, kind, closed)
+        self._cells, self._around, self._density, self._counts = _plan(self._family, tolerance)
+        self._placed: TolerancePlan | None = None
+
+    @property
+    def counts(self) -> PlannedCounts:
+        return PlannedCounts(self._around, int(self._counts.sum()) + 1)
+
+    def place(self) -> TolerancePlan:
+        if self._placed is None:
+            self._placed = _place_rings(self._family, self._cells, self._around, self._density, self._counts,
+                                        self.tolerance)
+        return self._placed
+
+
 def plan_counts(surface: EvolvedSurface, tolerance: float, kind: str = "circles", closed: bool = False) -> PlannedCounts:
     """The counts around (across) and along that ``plan_tolerance`` would choose, before placing
     any ring: reads the surface at a few hundred parameters and allocates nothing mesh-sized.
     (The final ring count can exceed this estimate by the few rings the placement adds where an
     interval's bound misses.) Vertices scale about as 1 / tolerance."""
-    family = _Surface(surface, kind, closed)
-    _, around, _, counts = _plan(family, tolerance)
-    return PlannedCounts(around, int(counts.sum()) + 1)
+    return PreparedPlan(surface, tolerance, kind, closed).counts
 
 
 def plan_tolerance(surface: EvolvedSurface, tolerance: float, kind: str = "circles", closed: bool = False) -> TolerancePlan:
@@ -344,8 +448,13 @@ def plan_tolerance(surface: EvolvedSurface, tolerance: float, kind: str = "circl
     kind: "circles" or "point_pairs". Raises InvalidInputError for a tolerance that is not a
     positive finite number or would need more than MAX_AROUND around or MAX_RINGS rings.
     """
-    family = _Surface(surface, kind, closed)
-    cells, around, density, counts = _plan(family, tolerance)
+    return PreparedPlan(surface, tolerance, kind, closed).place()
+
+
+def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarray, counts: np.ndarray,
+                 tolerance: float) -> TolerancePlan:
+    """Rings equidistributing ``density``, raised where an interval's bound misses (see the module doc)."""
+    surface, kind, closed = family.surface, family.kind, family.closed
     names = sorted(cells.terms)
     table = _RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1))
     t = None
@@ -398,7 +507,11 @@ def _split_missed(family, cells, table, names, t, around, tolerance):
             raise InvalidInputError(
                 f"tolerance {tolerance:.3g} is too small for surface '{family.surface.name}': "
                 f"it needs more than {MAX_RINGS} rings")
-        inserted = [t[k] + h[i] * np.arange(1, int(parts[i])) / parts[i] for i, k in enumerate(missed)]
-        t = np.sort(np.concatenate([t] + inserted))
+        # parts[i] - 1 new rings inside interval missed[i], evenly spaced: one array, no loop.
+        extra = (parts - 1.0).astype(np.int64)
+        owner = np.repeat(np.arange(len(missed)), extra)
+        step = np.arange(extra.sum()) - np.repeat(np.cumsum(extra) - extra, extra) + 1
+        inserted = t[missed][owner] + h[owner] * step / parts[owner]
+        t = np.sort(np.concatenate([t, inserted]))
     raise InvalidInputError(f"tolerance {tolerance:.3g}: no ring placement meets it for surface "
                             f"'{family.surface.name}'")
