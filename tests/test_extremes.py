@@ -18,6 +18,8 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+from normal_differences import assert_normals_match_differences
+
 from cgamesh.errors import DegenerateGeometryError, InvalidInputError
 from cgamesh.material import Material
 from cgamesh.meshing.circles import mesh_circle_surface
@@ -91,45 +93,8 @@ def assert_meshes_correctly(spec: SurfaceSpec, oracle, paper_weights, around=8, 
     assert distance.max() <= ON_SURFACE * size + representable, (
         f"{distance.max() / size:.2e} of the size off the surface")
 
-    assert_normals_match_differences(surface, around, mesh, spec.closed)
+    assert_normals_match_differences(surface, around, NORMAL_DEGREES)
     return mesh
-
-
-def assert_normals_match_differences(surface, around, mesh, closed):
-    """Sampled rings' normals against central differences over small steps in t and theta.
-
-    The rings sit off the segment joints (a linear or clamped spline may crease there, and
-    either side's normal is then right); the step in t is 1e-3, grown (up to 0.1, inside the
-    segment) where the surface moves less than 1e-7 of its size across it (nearly identical
-    controls): a smaller displacement is too few float64 spacings for a direction.
-    """
-    for centre_t in surface.segment_count * np.array([0.13, 0.51, 0.87]):
-        # Within its segment (off the joints), at most 0.1 wide.
-        widest = min(0.1, 0.9 * (centre_t - np.floor(centre_t)), 0.9 * (np.ceil(centre_t) - centre_t))
-        step = min(1e-3, widest)
-        while True:
-            t = np.array([centre_t - step, centre_t, centre_t + step])
-            fine = mesh_circle_surface(surface, around * 64, t=t, closed=False)
-            grid = fine.positions.reshape(3, around * 64 + 1, 3)
-            along_t = grid[2, ::64][:-1] - grid[0, ::64][:-1]
-            # A difference of positions a few float64 spacings apart has no direction: where the
-            # circles barely move (controls 1e-9 apart) the step grows until they move 1e-7 of
-            # the surface's size across it, or to the widest step (over 0.1 of a segment between
-            # controls 1e-9 apart the rings move about 1e-10: a million float64 spacings).
-            if np.linalg.norm(along_t, axis=1).min() >= 1e-7 * surface.frame.scale or step >= widest:
-                break
-            step = min(10.0 * step, widest)
-        columns = np.arange(0, around * 64, 64)
-        around_theta = grid[1, (columns + 1) % (around * 64)] - grid[1, (columns - 1) % (around * 64)]
-        reference = np.cross(around_theta, along_t)
-        strength = np.linalg.norm(reference, axis=1) / (np.linalg.norm(around_theta, axis=1)
-                                                        * np.linalg.norm(along_t, axis=1))
-        reference /= np.linalg.norm(reference, axis=1, keepdims=True)
-        normals = fine.normals.reshape(3, around * 64 + 1, 3)[1, columns]
-        cosine = np.abs(np.einsum("ji,ji->j", reference, normals))
-        regular = strength > 1e-3  # away from singular points of the surface
-        angles = np.degrees(np.arccos(np.clip(cosine[regular], -1.0, 1.0)))
-        assert angles.size == 0 or angles.max() <= NORMAL_DEGREES, f"normal {angles.max():.3f} degrees off"
 
 
 @EXAMPLES

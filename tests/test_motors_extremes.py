@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from normal_differences import assert_normals_match_differences
 from test_motors import bent_tube, circle_distance, motor_spec
 
 from cgamesh.errors import InvalidInputError
@@ -24,36 +25,6 @@ from cgamesh.pipeline import build_surface
 
 ON_SURFACE = 1e-9  # relative to the surface's size
 EXAMPLES = settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-
-
-def assert_normals_match_differences(surface, around):
-    """Normals at three rings against central differences of the mesh's own positions in t and
-    theta. A central difference errs by truncation (growing with the step in t: a short segment
-    between nearly identical controls turns within a tenth of its parameter) and by rounding
-    (growing as the step shrinks: between controls 1e-9 apart a step of 1e-3 moves the rings
-    1e-13 of the size, a few hundred float64 spacings). No one step suits every surface, so
-    steps from 1e-5 up to a tenth of the segment are tried and the best agreement counts: a
-    wrong normal disagrees at every step, since the differences converge to the true normal."""
-    fine_around = around * 64
-    columns = np.arange(0, fine_around, 64)
-    for centre_t in surface.segment_count * np.array([0.13, 0.51, 0.87]):
-        widest = min(0.1, 0.9 * (centre_t - np.floor(centre_t)), 0.9 * (np.ceil(centre_t) - centre_t))
-        worst = []
-        for step in widest * np.logspace(-4, 0, 9):
-            fine = mesh_circle_surface(surface, fine_around, t=np.array([centre_t - step, centre_t, centre_t + step]))
-            grid = fine.positions.reshape(3, fine_around + 1, 3)
-            along_t = grid[2, columns] - grid[0, columns]
-            around_theta = grid[1, (columns + 1) % fine_around] - grid[1, (columns - 1) % fine_around]
-            reference = np.cross(around_theta, along_t)
-            strength = np.linalg.norm(reference, axis=1) / (np.linalg.norm(around_theta, axis=1)
-                                                            * np.linalg.norm(along_t, axis=1))
-            reference /= np.linalg.norm(reference, axis=1, keepdims=True)
-            normals = fine.normals.reshape(3, fine_around + 1, 3)[1, columns]
-            cosine = np.abs(np.einsum("ji,ji->j", reference, normals))
-            regular = strength > 1e-3  # away from singular points of the surface
-            angles = np.degrees(np.arccos(np.clip(cosine[regular], -1.0, 1.0)))
-            worst.append(angles.max() if angles.size else 0.0)
-        assert min(worst) <= 0.1, f"normal {min(worst):.3f} degrees off at t = {centre_t} at best"
 
 
 def assert_meshes_correctly(spec, around=8, along=16):
