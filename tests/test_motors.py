@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from normal_differences import assert_normals_match_differences
 
 from cgamesh.errors import InvalidInputError
 from cgamesh.geometry.algebra import rotors
@@ -52,29 +53,6 @@ def circle_distance(points, centre, normal, radius):
     height = np.einsum("kmi,ki->km", offset, normal)
     in_plane = np.linalg.norm(offset - height[..., None] * normal[:, None, :], axis=-1)
     return np.hypot(height, in_plane - radius[:, None])
-
-
-def assert_normals_match_differences(surface, around, step=1e-5):
-    """Normals at three rings against central differences of the mesh's own positions in t and
-    theta (as tests/test_extremes.py does, with a smaller step in t: where a Bezier curve's
-    normals nearly cancel the plane turns fast, and a step of 1e-3 alone errs by 0.3 degrees)."""
-    fine_around = around * 64
-    columns = np.arange(0, fine_around, 64)
-    for centre_t in surface.segment_count * np.array([0.13, 0.51, 0.87]):
-        t = np.array([centre_t - step, centre_t, centre_t + step])
-        fine = mesh_circle_surface(surface, fine_around, t=t)
-        grid = fine.positions.reshape(3, fine_around + 1, 3)
-        along_t = grid[2, columns] - grid[0, columns]
-        around_theta = grid[1, (columns + 1) % fine_around] - grid[1, (columns - 1) % fine_around]
-        reference = np.cross(around_theta, along_t)
-        strength = np.linalg.norm(reference, axis=1) / (np.linalg.norm(around_theta, axis=1)
-                                                        * np.linalg.norm(along_t, axis=1))
-        reference /= np.linalg.norm(reference, axis=1, keepdims=True)
-        normals = fine.normals.reshape(3, fine_around + 1, 3)[1, columns]
-        cosine = np.abs(np.einsum("ji,ji->j", reference, normals))
-        regular = strength > 1e-3  # away from singular points of the surface
-        angles = np.degrees(np.arccos(np.clip(cosine[regular], -1.0, 1.0)))
-        assert angles.size == 0 or angles.max() <= 0.1, f"normal {angles.max():.3f} degrees off"
 
 
 def bent_tube(rng, count, spacing=6.0, turn=0.6):

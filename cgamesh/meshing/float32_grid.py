@@ -145,6 +145,10 @@ class _Surface:
         ids = self.corners(f)
         edges = sorted(((ids[i], ids[(i + 1) % 3]) for i in range(3)),
                        key=lambda e: float(np.sum((self.positions[e[0]] - self.positions[e[1]]) ** 2)))
+        return self._collapse_first(edges, removable)
+
+    def _collapse_first(self, edges, removable: np.ndarray) -> bool:
+        """Collapse the first of ``edges`` that can go, either way round."""
         for u, v in edges:
             if u == v:
                 continue
@@ -191,13 +195,7 @@ class _Surface:
                  for g in {g for v in self.corners(f) for g in self.faces_of(v)}
                  for ids in [self.corners(g)] for i in range(3)}
         edges = sorted(edges, key=lambda e: float(np.sum((self.positions[e[0]] - self.positions[e[1]]) ** 2)))
-        for u, v in edges[:tries]:
-            if u == v:
-                continue
-            for gone, kept in sorted([(u, v), (v, u)], key=lambda e: not removable[e[0]]):
-                if self._collapse(gone, kept):
-                    return True
-        return False
+        return self._collapse_first(edges[:tries], removable)
 
     def flip_longest(self, f: int) -> bool:
         ids = self.corners(f)
