@@ -158,14 +158,11 @@ def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, u: np.ndarray, fie
     a ring is flipped when its normals are all but opposite to its predecessor's.
     """
     rings, columns = len(smallest), len(theta)
-    step = theta[1] - theta[0]
-    suspicious = smallest <= normal_field.derivative_bound(field.raw) * step
+    suspicious, agreement = fold_screen(field, smallest, theta)
     signs = np.ones((rings, columns if np.any(suspicious) else 1))
-    agreement = np.einsum("ksc,ksc->k", normal_field.unit_rows(field.sample_normals[:-1]),
-                          normal_field.unit_rows(field.sample_normals[1:])) / field.sample_normals.shape[1]
     if np.any(suspicious):
         near = np.flatnonzero(suspicious)
-        values = _frame_values(field.frame[near], theta, field.speed[near])
+        values = frame_values(field.frame[near], theta, field.speed[near])
         folds = normal_field.reversals(values)
         if np.any(folds):
             row, column = np.nonzero(folds)
@@ -209,7 +206,17 @@ def _outward_sum(field: RingNormals, signs: np.ndarray, rings: CircleRings, posi
     return float(np.sum(outward * signs))
 
 
-def _frame_values(frame: np.ndarray, theta: np.ndarray, speed: np.ndarray) -> np.ndarray:
+def fold_screen(field: RingNormals, smallest: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(suspicious (K,): rings whose smallest |N| over the columns is within what |dN/dtheta|
+    can change over one column step, so N may vanish between columns; agreement (K - 1,): the
+    mean cosine between consecutive rings' normals at the seven sample angles)."""
+    suspicious = smallest <= normal_field.derivative_bound(field.raw) * (theta[1] - theta[0])
+    agreement = np.einsum("ksc,ksc->k", normal_field.unit_rows(field.sample_normals[:-1]),
+                          normal_field.unit_rows(field.sample_normals[1:])) / field.sample_normals.shape[1]
+    return suspicious, agreement
+
+
+def frame_values(frame: np.ndarray, theta: np.ndarray, speed: np.ndarray) -> np.ndarray:
     """(zeta, rho) (R, M, 2) at theta, zeros replaced by their limit d/dtheta along the circle."""
     values = normal_field.expand(frame, normal_field.trig_basis(theta))
     zero = np.hypot(values[..., 0], values[..., 1]) <= normal_field.ZERO_FRACTION * speed[:, None]

@@ -21,7 +21,7 @@ from cgamesh.geometry.algebra import products, rotors
 from cgamesh.meshing import normals as normal_field
 from cgamesh.meshing.batch_pass.motions import ChainMotions
 from cgamesh.meshing.circles import (E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION, OUTWARD_TRUST, STATIONARY_FRACTION,
-                                     RingNormals)
+                                     RingNormals, fold_screen, frame_values)
 
 
 @dataclass(frozen=True)
@@ -174,13 +174,10 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     fallback |= np.bincount(ring_chain[near_zero[0]], minlength=chains) > 0
 
     # circles._continuous_signs: only the sign-free case stays here
-    step = theta[1] - theta[0]
-    suspicious = smallest <= normal_field.derivative_bound(field.raw) * step
-    agreement = np.einsum("ksc,ksc->k", normal_field.unit_rows(field.sample_normals[:-1]),
-                          normal_field.unit_rows(field.sample_normals[1:])) / field.sample_normals.shape[1]
+    suspicious, agreement = fold_screen(field, smallest, theta)
     if np.any(suspicious):
         near = np.flatnonzero(suspicious)
-        values = _frame_values(field.frame[near], theta, field.speed[near])
+        values = frame_values(field.frame[near], theta, field.speed[near])
         folds = normal_field.reversals(values)
         fallback |= np.bincount(ring_chain[near[folds.any(axis=1)]], minlength=chains) > 0
         row_of = np.full(len(t), -1)
@@ -295,9 +292,3 @@ def _against_normals(positions: np.ndarray, normals: np.ndarray, pair: np.ndarra
             summed = (first[1][rows] + second[1][rows] + third[1][rows]).reshape(-1, 3)
             out[rows, :, kind] = (np.einsum("ti,ti->t", geometric, summed) < 0.0).reshape(len(rows), -1)
     return out
-
-
-def _frame_values(frame: np.ndarray, theta: np.ndarray, speed: np.ndarray) -> np.ndarray:
-    from cgamesh.meshing.circles import _frame_values as values
-
-    return values(frame, theta, speed)
