@@ -70,10 +70,12 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
     """Hands the tube meshes of ``chains`` to ``sink`` in chain order (runs of batched chains as
     one mesh each, unless ``options.split``), chunk by chunk, so a caller that merges them holds
     one chunk's pieces at a time; returns the skipped chains' lines. Updates ``tangents`` and
-    ``segment_of`` (the junction spheres' direction and segment) as the per-chain loop does."""
-    counts = np.array([len(c.nodes) for c in chains], dtype=np.int64)
+    ``segment_of`` (the junction spheres' direction and segment) as the per-chain loop does.
+    ``chains``: every chain's nodes as one flat array (``nodes``, ``offsets``, ``counts``);
+    ``chains[i]`` is chain i with its label, made only for messages, names and the per-chain path."""
+    counts = chains.counts
     total = len(chains)
-    nodes = np.concatenate([c.nodes for c in chains]) if total else np.zeros(0, np.int64)
+    nodes = chains.nodes[chains.offsets[0]:chains.offsets[-1]]
     chain_of = np.repeat(np.arange(total), counts)
     first = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
     inside = np.bincount(chain_of, weights=soma[nodes], minlength=total)
