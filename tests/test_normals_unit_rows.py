@@ -1,4 +1,5 @@
-"""unit_rows sums the squares column by column: the same bits as np.linalg.norm, unit rows, zeros kept."""
+"""row_lengths and unit_rows sum the squares column by column: the same bits as np.linalg.norm, unit
+rows, zeros kept."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import numpy as np
 import pytest
 
 from cgamesh.geometry.algebra.conformal import EUCLIDEAN, vector
-from cgamesh.meshing.normals import unit_rows
+from cgamesh.meshing.normals import row_lengths, unit_rows
 
 
 def by_norm(values: np.ndarray) -> np.ndarray:
@@ -21,6 +22,7 @@ def test_unit_rows_equal_the_norm_bit_for_bit(columns, shape):
     values.reshape(-1, columns)[0] = 0.0  # a zero row stays zero
     values.reshape(-1, columns)[-1, 0] = 0.0  # an axis-aligned row stays exact
     for view in (values, values[:-1], values[1:], values[..., ::-1]):  # views as the callers pass
+        np.testing.assert_array_equal(row_lengths(view), np.linalg.norm(view, axis=-1))
         got = unit_rows(view)
         np.testing.assert_array_equal(got, by_norm(view))
         lengths = np.linalg.norm(got, axis=-1)

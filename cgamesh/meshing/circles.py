@@ -93,7 +93,7 @@ class RingNormals:
         velocity = rings.velocity(points) / rings.frame.scale
         zeta_rho = normal_field.frame_coordinates(velocity, radial, rings.normal)
         sampled = normal_field.normal_samples(zeta_rho, radial, rings.normal)
-        speed = np.linalg.norm(velocity, axis=-1).max(axis=1)
+        speed = normal_field.row_lengths(velocity).max(axis=1)
         return cls(normal_field.fit(zeta_rho), normal_field.fit(sampled), speed, points, sampled)
 
     def replace_rings(self, which: np.ndarray, other: "RingNormals") -> "RingNormals":

@@ -204,21 +204,26 @@ def fold_sines(at: np.ndarray, before: np.ndarray, after: np.ndarray, dt: np.nda
     return np.where(t_length <= STILL_FRACTION * theta_length, 0.0, sine)
 
 
-def unit_rows(values: np.ndarray) -> np.ndarray:
-    """values (..., C) scaled to unit length (zeros stay zero).
+def row_lengths(values: np.ndarray) -> np.ndarray:
+    """|values| over the last axis (...,), as np.linalg.norm gives it, bit for bit.
 
-    With two or three columns (normal coordinates, sample normals) the squares are summed
-    column by column, in the order np.linalg.norm sums them (the same bits, tests/test_normals_unit_rows.py):
-    its reduction over a short last axis pays a loop per row, two to four times the time.
+    With two or three columns (normal coordinates, velocities, sample normals) the squares are
+    summed column by column, in the order np.linalg.norm sums them
+    (tests/test_normals_unit_rows.py): its reduction over a short last axis pays a loop per
+    row, two to four times the time.
     """
     columns = values.shape[-1]
     if columns > 3:
-        size = np.linalg.norm(values, axis=-1, keepdims=True)
-        return values / np.maximum(size, np.finfo(float).tiny)
+        return np.linalg.norm(values, axis=-1)
     total = values[..., 0] * values[..., 0]
     for k in range(1, columns):
         total += values[..., k] * values[..., k]
-    return values / np.maximum(np.sqrt(total), np.finfo(float).tiny)[..., None]
+    return np.sqrt(total, out=total)
+
+
+def unit_rows(values: np.ndarray) -> np.ndarray:
+    """values (..., C) scaled to unit length (zeros stay zero)."""
+    return values / np.maximum(row_lengths(values), np.finfo(float).tiny)[..., None]
 
 
 def reversals(values: np.ndarray) -> np.ndarray:
