@@ -167,7 +167,7 @@ def _limit_at_zeros(values, lengths, rows, coefficients, theta, speed) -> None:
 
 def derivative_bound(coefficients: np.ndarray) -> np.ndarray:
     """(K,) an upper bound of |dN/dtheta| over the whole ring, from coefficients (K, 7, C)."""
-    return np.linalg.norm(coefficients, axis=-1) @ _FREQUENCY
+    return row_lengths(coefficients) @ _FREQUENCY
 
 
 def fold_sines(at: np.ndarray, before: np.ndarray, after: np.ndarray, dt: np.ndarray,
