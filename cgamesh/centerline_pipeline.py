@@ -93,6 +93,44 @@ class _Chain:
     nodes: np.ndarray
 
 
+@dataclass(frozen=True)
+class _ChainList:
+    """Every chain (or polyline) of an input as one flat index array: chain i's nodes are
+    ``nodes[offsets[i]:offsets[i + 1]]``. No Python object per chain is made up front (a
+    tractogram has tens of thousands); ``chains[i]`` builds one, with the label and file line
+    that messages, per-chain mesh names and progress use, when it is asked for."""
+
+    lines: Centerlines
+    nodes: np.ndarray
+    offsets: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.offsets) - 1
+
+    @property
+    def counts(self) -> np.ndarray:
+        """(M,) nodes of each chain."""
+        return np.diff(self.offsets)
+
+    def __getitem__(self, i: int) -> _Chain:
+        i = int(i)
+        if not 0 <= i < len(self):
+            raise IndexError(i)
+        nodes = self.nodes[self.offsets[i]: self.offsets[i + 1]]
+        lines = self.lines
+        if not lines.is_tree:
+            return _Chain(f"streamline {i}", None, nodes)
+        ids = nodes if lines.ids is None else lines.ids[nodes]
+        word = "nodes" if lines.ids is not None else "points"
+        label = (f"{word} {', '.join(str(int(k)) for k in ids)}" if len(ids) <= 4 else
+                 f"{word} {int(ids[0])}, {int(ids[1])}, ..., {int(ids[-1])} ({len(ids)} {word})")
+        line = int(lines.lines[nodes[1]]) if lines.lines is not None else None
+        return _Chain(label, line, nodes)
+
+    def __iter__(self):
+        return (self[i] for i in range(len(self)))
+
+
 def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
                      progress: Callable[..., None] = lambda label, count=1: None,
                      batched: bool = True) -> TubeMeshes:
@@ -211,24 +249,14 @@ def _radii(lines: Centerlines, options: TubeOptions) -> np.ndarray:
     return radii
 
 
-def _chains(lines: Centerlines) -> tuple[list[_Chain], np.ndarray]:
+def _chains(lines: Centerlines) -> tuple[_ChainList, np.ndarray]:
     """The chains (or streamlines) to mesh, and the junction nodes (none for polylines)."""
     if lines.is_tree:
         from cgamesh.inputs.trees import split_tree
 
         split = split_tree(lines.parents)
-        chains = []
-        for i in range(len(split)):
-            nodes = split.chain(i)
-            ids = nodes if lines.ids is None else lines.ids[nodes]
-            word = "nodes" if lines.ids is not None else "points"
-            label = (f"{word} {', '.join(str(int(k)) for k in ids)}" if len(ids) <= 4 else
-                     f"{word} {int(ids[0])}, {int(ids[1])}, ..., {int(ids[-1])} ({len(ids)} {word})")
-            line = int(lines.lines[nodes[1]]) if lines.lines is not None else None
-            chains.append(_Chain(label, line, nodes))
-        return chains, split.junctions
-    offsets = lines.offsets
-    return ([_Chain(f"streamline {i}", None, np.arange(offsets[i], offsets[i + 1])) for i in range(len(offsets) - 1)],
+        return _ChainList(lines, split.nodes, split.offsets), split.junctions
+    return (_ChainList(lines, np.arange(len(lines.points), dtype=np.int64), np.asarray(lines.offsets, dtype=np.int64)),
             np.zeros(0, dtype=np.int64))
 
 
@@ -452,14 +480,14 @@ def _assemble(pieces: list[SurfaceMesh], options: TubeOptions, stem: str) -> lis
     return pieces
 
 
-def _expected_size(chains: list[_Chain], junctions: np.ndarray, soma: np.ndarray,
+def _expected_size(chains: _ChainList, junctions: np.ndarray, soma: np.ndarray,
                    options: TubeOptions) -> tuple[int, int]:
     """Vertices and triangles of the merged tubes and spheres at a fixed resolution (an upper
     bound: duplicate points merged, chains skipped or inside the soma have fewer); with a
     tolerance, a first guess the merged arrays grow from."""
     from cgamesh.meshing.junctions import uv_spheres
 
-    nodes = np.array([len(c.nodes) for c in chains], dtype=np.int64)
+    nodes = chains.counts
     along = (np.maximum(nodes, 2) - 1) * (options.subdivide + 1) + 1
     vertices = int(along.sum()) * (options.around + 1)
     triangles = int((along - 1).sum()) * 2 * options.around

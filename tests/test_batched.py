@@ -80,6 +80,22 @@ def _polylines(polylines, scalars=None):
     return Centerlines(points=points, offsets=offsets, source="polylines", units="mm", scalars=scalars or {})
 
 
+@pytest.mark.parametrize("split", [False, True])
+def test_per_point_scalar(split):
+    """Colouring by a field of the file: its attribute interpolated along every tube, a duplicate
+    point in a chain, and a polyline of one point, as the per-chain path gives them."""
+    rng = np.random.default_rng(7)
+    polylines = [np.cumsum(rng.normal(size=(k, 3)), axis=0) * 3.0 for k in rng.integers(2, 9, size=30)]
+    polylines[4][2] = polylines[4][1]
+    polylines[9] = polylines[9][:1]
+    lines = _polylines(polylines, {"fa": rng.random(sum(len(p) for p in polylines))})
+    assert_same(lines, TubeOptions(radius=0.3, color_by="fa", split=split))
+    built = mesh_centerlines(lines, TubeOptions(radius=0.3, color_by="fa", split=split))
+    values = np.concatenate([m.attributes["scalar"] for m in built.meshes])
+    assert values.min() >= lines.scalars["fa"].min() and values.max() <= lines.scalars["fa"].max()
+    assert len(np.unique(values)) > 30  # interpolated between nodes, not one value per tube
+
+
 def test_degenerate_chain_is_skipped_with_its_line():
     good = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.5, 0.0]])
     single_point = np.array([[5.0, 5.0, 5.0], [5.0, 5.0, 5.0]])  # one distinct point

@@ -23,8 +23,10 @@ def dense(kind, a, b, grades_a, grades_b, grades_out):
 
 
 @pytest.mark.parametrize("kind", ["geometric", "outer", "inner"])
-@pytest.mark.parametrize("rows", [2, 3, 64, 2500])
-def test_sparse_sums_equal_the_matrix_product(kind, rows):
+@pytest.mark.parametrize("rows", [2, 3, 64, 128, 2500])
+def test_sparse_sums_equal_the_matrix_product(kind, rows, monkeypatch):
+    # the blade-by-blade sums at every batch size (products take them from SPARSE_MIN_ROWS rows)
+    monkeypatch.setattr(products, "SPARSE_MIN_ROWS", 2)
     rng = np.random.default_rng(rows)
     outputs = [(0, 1, 2, 3, 4, 5), (0,), (1,), (2, 4)] if kind == "geometric" else [(0, 1, 2, 3, 4, 5)]
     cases = [(ga, gb, go) for ga in GRADE_SETS for gb in GRADE_SETS for go in outputs]

@@ -55,6 +55,12 @@ def circle_blades(state: MotionState) -> np.ndarray:
 def circle_blade_rates(state: MotionState) -> np.ndarray:
     """dC/dt (A, 32) of the normalised circles: (S ^ P)' = S' ^ P + S ^ P' (S, P as in
     ``circle_blades``), dualised, and the normalisation's derivative from d(C^2) = 2 <C C'>_0."""
+    return circle_blades_and_rates(state)[1]
+
+
+def circle_blades_and_rates(state: MotionState) -> tuple[np.ndarray, np.ndarray]:
+    """``circle_blades`` and ``circle_blade_rates`` of the same states, the blade S ^ P and its
+    size computed once for both (the same bits as the two calls)."""
     sphere, d_sphere, plane, d_plane = _dual_circles(state)
     one = (1,)
     raw = products.dual(products.outer(sphere, plane, one, one))
@@ -62,7 +68,7 @@ def circle_blade_rates(state: MotionState) -> np.ndarray:
     size_sq = square(raw, CIRCLE_GRADE)
     size = np.sqrt(size_sq)
     half_d_size_sq = products.geometric(raw, d_raw, (3,), (3,), (0,))[..., 0]
-    return d_raw / size[:, None] - raw * (half_d_size_sq / (size_sq * size))[:, None]
+    return raw / size[:, None], d_raw / size[:, None] - raw * (half_d_size_sq / (size_sq * size))[:, None]
 
 
 class MotorSample:

@@ -93,7 +93,7 @@ class RingNormals:
         velocity = rings.velocity(points) / rings.frame.scale
         zeta_rho = normal_field.frame_coordinates(velocity, radial, rings.normal)
         sampled = normal_field.normal_samples(zeta_rho, radial, rings.normal)
-        speed = np.linalg.norm(velocity, axis=-1).max(axis=1)
+        speed = normal_field.row_lengths(velocity).max(axis=1)
         return cls(normal_field.fit(zeta_rho), normal_field.fit(sampled), speed, points, sampled)
 
     def replace_rings(self, which: np.ndarray, other: "RingNormals") -> "RingNormals":
@@ -211,8 +211,8 @@ def fold_screen(field: RingNormals, smallest: np.ndarray, theta: np.ndarray) -> 
     can change over one column step, so N may vanish between columns; agreement (K - 1,): the
     mean cosine between consecutive rings' normals at the seven sample angles)."""
     suspicious = smallest <= normal_field.derivative_bound(field.raw) * (theta[1] - theta[0])
-    agreement = np.einsum("ksc,ksc->k", normal_field.unit_rows(field.sample_normals[:-1]),
-                          normal_field.unit_rows(field.sample_normals[1:])) / field.sample_normals.shape[1]
+    unit = normal_field.unit_rows(field.sample_normals)  # row by row: each ring's once, not twice
+    agreement = np.einsum("ksc,ksc->k", unit[:-1], unit[1:]) / field.sample_normals.shape[1]
     return suspicious, agreement
 
 

@@ -23,7 +23,7 @@ def vector(x) -> np.ndarray:
     """Euclidean vectors (..., 3) as grade-1 multivectors (..., 32)."""
     x = np.asarray(x, dtype=np.float64)
     out = np.zeros(x.shape[:-1] + (BLADE_COUNT,))
-    out[..., EUCLIDEAN] = x
+    out[..., E1:E3 + 1] = x  # e1, e2, e3 are consecutive blades (tests/test_normals_unit_rows.py): a slice, not a gather
     return out
 
 

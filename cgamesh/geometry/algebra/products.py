@@ -30,6 +30,10 @@ from cgamesh.geometry.algebra.layout import (
 )
 
 ALL_GRADES = (0, 1, 2, 3, 4, 5)
+# Batches from this many rows are summed blade by blade (``_sparse_steps``), smaller ones
+# through the matrix: the same bits either way (tests/test_products_sparse.py), and the
+# crossover in time lies between 50 and 500 rows.
+SPARSE_MIN_ROWS = 128
 _SIGN_TABLES = {"geometric": GEOMETRIC_SIGN, "outer": OUTER_SIGN, "inner": INNER_SIGN}
 
 
@@ -114,8 +118,11 @@ def _product(kind, a, b, grades_a, grades_b, grades_out):
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
     shape = np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
-    # one batch axis of two rows or more: there the matrix product sums row by row in order
-    steps = _sparse_steps(kind, *selections) if blades_out.size and len(shape) == 1 and shape[0] > 1 else None
+    # one batch axis of SPARSE_MIN_ROWS rows or more: there the matrix product sums row by row
+    # in order, and the blade-by-blade sums (a few whole-row operations per blade) are faster;
+    # below it the one matrix product is (4-5x on a few rows: a tiny input's fixed cost)
+    steps = (_sparse_steps(kind, *selections) if blades_out.size and len(shape) == 1 and shape[0] >= SPARSE_MIN_ROWS
+             else None)
     if steps is not None and blades_b.size == 1:
         # a times one blade (a dual): each result blade takes one term, a signed column of a
         # (0.0 + term, as the sums from zero give: -0.0 becomes 0.0); np.take, several times

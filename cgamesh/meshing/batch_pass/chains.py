@@ -70,10 +70,12 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
     """Hands the tube meshes of ``chains`` to ``sink`` in chain order (runs of batched chains as
     one mesh each, unless ``options.split``), chunk by chunk, so a caller that merges them holds
     one chunk's pieces at a time; returns the skipped chains' lines. Updates ``tangents`` and
-    ``segment_of`` (the junction spheres' direction and segment) as the per-chain loop does."""
-    counts = np.array([len(c.nodes) for c in chains], dtype=np.int64)
+    ``segment_of`` (the junction spheres' direction and segment) as the per-chain loop does.
+    ``chains``: every chain's nodes as one flat array (``nodes``, ``offsets``, ``counts``);
+    ``chains[i]`` is chain i with its label, made only for messages, names and the per-chain path."""
+    counts = chains.counts
     total = len(chains)
-    nodes = np.concatenate([c.nodes for c in chains]) if total else np.zeros(0, np.int64)
+    nodes = chains.nodes[chains.offsets[0]:chains.offsets[-1]]
     chain_of = np.repeat(np.arange(total), counts)
     first = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
     inside = np.bincount(chain_of, weights=soma[nodes], minlength=total)
@@ -182,30 +184,33 @@ def _chain_meshes(members, result: TubeArrays, first, count, radii, t, scalar, n
     if not len(keep):
         return {}
     columns = options.around + 1
-    global_chain = members[result.vertex_chain]
-    s = result.ring_local / (options.subdivide + 1)
-    attributes = {"radius": _interp(radii, first, count, global_chain, s),
-                  "segment": global_chain.astype(np.float64)}
+    # every vertex of a ring has the ring's values: they are computed once per ring, then repeated
+    ring_chain = members[result.vertex_chain[::columns]]
+    ring_s = result.ring_local[::columns] / (options.subdivide + 1)
+    attributes = {"radius": np.repeat(_interp(radii, first, count, ring_chain, ring_s), columns),
+                  "segment": np.repeat(ring_chain.astype(np.float64), columns)}
     if scalar is not None:
-        attributes["scalar"] = _interp(scalar[nodes], first, count, global_chain, s)
+        attributes["scalar"] = np.repeat(_interp(scalar[nodes], first, count, ring_chain, ring_s), columns)
     colors = None
     if options.color_by == "direction":
         from cgamesh.meshing.colors import direction_colors
 
+        global_chain = members[result.vertex_chain]
+        s = result.ring_local / (options.subdivide + 1)
         along_t = np.stack([_interp(t[:, k], first, count, global_chain, s) for k in range(3)], axis=1)
         colors = direction_colors(along_t)  # any length; a zero one (a turn back) gets NAN_COLOR
     vertex_counts = np.bincount(result.vertex_chain, minlength=len(members))
     face_counts = np.bincount(result.face_chain, minlength=len(members))
     v_start = np.concatenate([[0], np.cumsum(vertex_counts)])
     f_start = np.concatenate([[0], np.cumsum(face_counts)])
-    uv_lengths = result.uv_lengths[result.vertex_chain]
+    uv_lengths = np.repeat(result.uv_lengths, vertex_counts, axis=0)
     if options.split:
         groups = [[k] for k in keep]
     else:  # runs of chains with consecutive indices
         breaks = np.flatnonzero(np.diff(members[keep]) != 1) + 1
         groups = np.split(keep, breaks)
     out = {}
-    faces_global = None
+    face_offset = None
     for group in groups:
         lo, hi = int(group[0]), int(group[-1])
         vs, ve, fs, fe = v_start[lo], v_start[hi + 1], f_start[lo], f_start[hi + 1]
@@ -214,9 +219,10 @@ def _chain_meshes(members, result: TubeArrays, first, count, radii, t, scalar, n
             weld = _grid_weld(vertex_counts[lo] // columns, options.around, False)
             name = f"{stem}_{label_name(chains[int(members[lo])].label)}"
         else:
-            if faces_global is None:
-                faces_global = result.faces + v_start[result.face_chain][:, None]
-            faces = (faces_global[fs:fe] - vs).astype(np.int32)
+            if face_offset is None:  # each face's chain's first vertex in the chunk
+                face_offset = np.repeat(v_start[:-1], face_counts)
+            faces = np.add(result.faces[fs:fe], (face_offset[fs:fe] - vs)[:, None],
+                           out=np.empty((fe - fs, 3), dtype=np.int32), casting="unsafe")
             weld = None
             name = stem
         out[int(members[lo])] = SurfaceMesh(

@@ -46,10 +46,10 @@ class _BladeRings:
 
     @classmethod
     def of(cls, state, origin, scale) -> "_BladeRings":
-        from cgamesh.geometry.motor_surface import circle_blade_rates, circle_blades
+        from cgamesh.geometry.motor_surface import circle_blades_and_rates
         from cgamesh.geometry.objects import circle_euclidean
 
-        blades, derivatives = circle_blades(state), circle_blade_rates(state)
+        blades, derivatives = circle_blades_and_rates(state)
         centre, normal, radius = circle_euclidean(blades)
         omega = products.geometric(blades, derivatives, (3,), (3,), (2,))
         return cls(origin + scale[:, None] * centre, normal, scale * radius, omega, origin, scale)
