@@ -39,6 +39,7 @@ from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
 from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.meshing.circles import transported_frames
 from cgamesh.meshing.derivative_bounds import cell_bounds, cell_derivatives, segment_samples
+from cgamesh.meshing.normal_projection import normal_projection_error, normal_projection_spacing
 
 # Cells per segment of the derivative sampling: at least this many, and about this many per
 # ring of a first estimate (the Lipschitz margin shrinks with the cells; the cost grows).
@@ -184,13 +185,15 @@ def _ribbon_cells(surface: EvolvedSurface, cells: int) -> _Cells:
     return _Cells(cells, dict(A=scale * np.maximum(a2, b2), B=scale * d1), 0.0)
 
 
-def _circle_error(terms: dict, h, around, rate: float):
+def _circle_error(terms: dict, h, around, rate: float, wide: dict | None = None):
     """E for intervals of length h with the given term maxima and M = around (broadcasting).
 
     The mesh's frame on an interval is the smallest rotation from the first ring's plane,
     which spins about n relative to the sampled transport by psi' (at most turned |n'| / q,
     plus a closed loop's holonomy rate): x(t, theta) = x_G(t, theta + psi(t)) adds
-    2 B psi' + r (psi'^2 + |psi''|) to A and r psi' to B."""
+    2 B psi' + r (psi'^2 + |psi''|) to A and r psi' to B. With ``wide`` (the maxima over each
+    interval widened within its segment), the bound by the error normal to the surface
+    (cgamesh.meshing.normal_projection) is a third one: E is the smallest."""
     n1, n2, rm = terms["N1"], terms["N2"], terms["Rm"]
     turned = h * n1  # bounds |n(t) - n(t_k)| over the interval
     q = 2.0 - 0.5 * turned * turned  # <= 1 + n(t_k) . n(t)
@@ -202,6 +205,8 @@ def _circle_error(terms: dict, h, around, rate: float):
         sag = rm * (1.0 - np.cos(np.pi / around))
         error = sag + a * h * h / 8.0 + b * h * np.sin(np.pi / around) / 2.0
         error = np.minimum(error, sag + _normal_twist_error(terms, h, around, a, b, spin, spin_rate))
+    if wide is not None:
+        error = np.minimum(error, normal_projection_error(terms, wide, h, around, rate))
     return np.where(turned < 1.0, error, np.inf)
 
 
@@ -262,7 +267,8 @@ def _circle_spacing(terms: dict, around, tolerance: float, rate: float):
     # h |gamma_theta| <= 1 is checked when the rings are bounded.
     square, linear, valid = _normal_twist_terms(terms, around, full, twist, rate, 0.0)
     normal = np.where(valid, _root(np.where(valid, square, 1.0), np.where(valid, linear, 1.0), c), 0.0)
-    return np.maximum(spacing, normal)
+    projected = normal_projection_spacing(terms, around, tolerance, rate, _root)
+    return np.maximum(np.maximum(spacing, normal), projected)
 
 
 def _ribbon_spacing(terms: dict, across, tolerance: float, rate: float = 0.0):
@@ -294,8 +300,10 @@ class _Surface:
             return _circle_cells(self.surface, count, self.closed)
         return _ribbon_cells(self.surface, count)
 
-    def error(self, terms, h, around, rate):
-        return (_circle_error if self.kind == "circles" else _ribbon_error)(terms, h, around, rate)
+    def error(self, terms, h, around, rate, wide=None):
+        if self.kind == "circles":
+            return _circle_error(terms, h, around, rate, wide)
+        return _ribbon_error(terms, h, around, rate)
 
     def spacing(self, terms, around, tolerance, rate):
         return (_circle_spacing if self.kind == "circles" else _ribbon_spacing)(terms, around, tolerance, rate)
@@ -394,7 +402,24 @@ def _interval_errors(family: _Surface, cells: _Cells, table: _RangeMax, names, t
     last = np.clip(np.ceil(t[1:] * cells.cells).astype(np.int64) - 1, first, n - 1)
     maxima = table.query(first, last)
     terms = {name: maxima[:, i] for i, name in enumerate(names)}
-    return family.error(terms, np.diff(t), around, cells.closed_rate), first, last, terms
+    h = np.diff(t)
+    wide = _widened(cells, table, names, t) if family.kind == "circles" else None
+    return family.error(terms, h, around, cells.closed_rate, wide), first, last, terms
+
+
+def _widened(cells: _Cells, table: _RangeMax, names, t: np.ndarray) -> dict:
+    """Per interval the term maxima over it widened by ``margin`` = min(h, its distance to its
+    segment's ends) on each side: where the normal projection's step along t may reach (never
+    across a joint, where the members are not twice differentiable)."""
+    segment = np.clip(np.floor(t[:-1]), 0, cells.segments - 1)
+    margin = np.maximum(np.minimum(np.minimum(np.diff(t), t[:-1] - segment), segment + 1.0 - t[1:]), 0.0)
+    low, high = segment * cells.cells, (segment + 1) * cells.cells - 1
+    first = np.clip(np.floor((t[:-1] - margin) * cells.cells), low, high).astype(np.int64)
+    last = np.clip(np.ceil((t[1:] + margin) * cells.cells) - 1, first, high).astype(np.int64)
+    maxima = table.query(first, last)
+    wide = {name: maxima[:, i] for i, name in enumerate(names)}
+    wide["margin"] = margin
+    return wide
 
 
 def _plan(family: _Surface, tolerance: float) -> tuple[_Cells, int, np.ndarray, np.ndarray]:
