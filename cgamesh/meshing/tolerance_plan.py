@@ -121,13 +121,17 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
     r0, _, _ = cell_bounds(grid(radius[:, None]))
     _, n1, n2 = cell_bounds(grid(normal))
     norm = lambda x: np.sqrt(np.sum(x * x, axis=-1))  # noqa: E731
-    # max over theta of |a + B cos theta + C sin theta|: on ANGLES angles, plus the most it can
-    # grow between two of them.
+    # max over theta of |G| = |a + B cos theta + C sin theta|: on ANGLES angles, plus the most
+    # g = |G|^2 can grow from the nearest of them to a maximum between (where g' = 0):
+    # (spacing^2 / 8) max |g''|, with g'' = 2 |G'|^2 + 2 G . G'' and |G'|, |G''| <= reach.
     a, b, c = path.second, cosine.second, sine.second
     angles = 2.0 * np.pi * np.arange(ANGLES) / ANGLES
     on_circle = norm(a[..., None, :] + np.cos(angles)[:, None] * b[..., None, :] + np.sin(angles)[:, None] * c[..., None, :])
     reach = np.sqrt(norm(b) ** 2 + norm(c) ** 2)
-    along = (on_circle.max(axis=-1) + reach * np.pi / ANGLES + norm(path.second_radius)
+    curvature = 4.0 * reach * reach + 2.0 * norm(a) * reach  # >= max |g''|
+    spacing = 2.0 * np.pi / ANGLES
+    largest = np.sqrt(on_circle.max(axis=-1) ** 2 + spacing * spacing / 8.0 * curvature)
+    along = (largest + norm(path.second_radius)
              + np.hypot(norm(cosine.second_radius), norm(sine.second_radius)))
     # max over theta of |-sin theta B1 + cos theta C1|: the larger singular value of [B1 C1].
     b1, c1 = cosine.first, sine.first
