@@ -201,6 +201,26 @@ def test_the_error_normal_to_the_surface_is_what_bounds_tubes(path, twist_share,
     assert np.mean(normal < np.minimum(whole, twist)) >= normal_share
 
 
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), count=st.integers(1, 300), wobble=st.floats(0.0, 3.0))
+def test_the_plans_transport_is_the_meshers(seed, count, wobble):
+    """The plan's quaternion transport (cgamesh.meshing.dense_transport) carries the same frames
+    as the mesher's rotors (circles.transported_frames), to rounding: normals that wander,
+    exact axes and turns back (a normal followed by its opposite) included."""
+    from cgamesh.meshing.circles import transported_frames
+    from cgamesh.meshing.dense_transport import transported_axes
+
+    rng = np.random.default_rng(seed)
+    normal = np.cumsum(wobble * rng.normal(size=(count, 3)), axis=0) + np.array([0.0, 0.0, 1.0])
+    normal[rng.random(count) < 0.05] = np.eye(3)[rng.integers(0, 3)] * rng.choice([-1.0, 1.0])
+    flips = np.flatnonzero(rng.random(count - 1) < 0.03) + 1 if count > 1 else np.array([], dtype=int)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    normal[flips] = -normal[flips - 1]
+    u, v = transported_axes(normal)
+    expected_u, expected_v = transported_frames(normal, False, np.arange(count, dtype=float))
+    assert np.allclose(u, expected_u, atol=1e-10) and np.allclose(v, expected_v, atol=1e-10)
+
+
 def test_derivative_bounds_cover_the_analytic_derivatives():
     """On f(t) = (sin 3t, t^3, exp(t) cos 5t) per segment, the per-cell bounds of |f|, |f'| and
     |f''| are at least their largest values over each cell (checked at 64 points per cell), and

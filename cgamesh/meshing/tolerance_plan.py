@@ -38,6 +38,7 @@ from cgamesh.errors import InvalidInputError
 from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
 from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.meshing.circles import transported_frames
+from cgamesh.meshing.dense_transport import transported_axes
 from cgamesh.meshing.derivative_bounds import cell_bounds, cell_derivatives, segment_samples
 from cgamesh.meshing.normal_projection import normal_projection_error, normal_projection_spacing
 
@@ -51,6 +52,8 @@ SAMPLE_CHUNK = 512
 # Counts around / across tried when choosing the split of the tolerance.
 AROUND_CANDIDATES = 48
 MAX_ACROSS = 64
+# Candidates priced in the first, coarse pass of the choice (every this many).
+COARSE_STRIDE = 4
 # Angles at which the largest |d2x/dt2| around a circle is looked for (plus a margin between).
 ANGLES = 32
 # Rounds of raising the density where an interval's bound misses, before splitting it.
@@ -111,7 +114,7 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
     between the centre's, the radius' and the frame's parts), the largest radius, |n'| and |n''|."""
     t = segment_samples(surface.segment_count, cells)
     centre, normal, radius = circle_euclidean(_read(surface, t.ravel()))
-    u, v = transported_frames(normal, False, t.ravel())
+    u, v = transported_axes(normal)
     shape = t.shape
     scale = surface.frame.scale
     grid = lambda values: values.reshape(shape + values.shape[1:])  # noqa: E731
@@ -333,8 +336,23 @@ class _Surface:
 
 
 def _choose_counts(family: _Surface, cells: _Cells, tolerance: float) -> tuple[int, np.ndarray, np.ndarray]:
-    """(around, density (segments, cells), intervals per segment) minimising planned vertices."""
+    """(around, density (segments, cells), intervals per segment) minimising planned vertices.
+
+    The planned vertices against the count around fall, then rise (the sag's share of the
+    tolerance against the rings'): every COARSE_STRIDE-th candidate is priced first, then every
+    candidate between the best one's neighbours."""
     options = family.candidates(cells, tolerance)
+    coarse = np.unique(np.append(np.arange(0, len(options), COARSE_STRIDE), len(options) - 1))
+    best = coarse[_price(family, cells, tolerance, options[coarse])[0]]
+    position = int(np.searchsorted(coarse, best))
+    low, high = coarse[max(position - 1, 0)], coarse[min(position + 1, len(coarse) - 1)]
+    fine = options[low:high + 1]
+    chosen, density, counts = _price(family, cells, tolerance, fine)
+    return int(fine[chosen]), density, counts
+
+
+def _price(family: _Surface, cells: _Cells, tolerance: float, options: np.ndarray):
+    """(index of the option with the fewest planned vertices, its density, its counts)."""
     terms = {k: v[None] for k, v in cells.terms.items()}
     with np.errstate(divide="ignore"):
         density = 1.0 / family.spacing(terms, options[:, None, None], tolerance, cells.closed_rate)
@@ -347,7 +365,7 @@ def _choose_counts(family: _Surface, cells: _Cells, tolerance: float) -> tuple[i
         raise InvalidInputError(
             f"tolerance {tolerance:.3g} is too small for surface '{family.surface.name}': "
             f"it needs more than {MAX_RINGS} rings")
-    return int(options[best]), density[best], counts[best]
+    return best, density[best], counts[best]
 
 
 def _neighbourhood_max(density: np.ndarray) -> np.ndarray:
