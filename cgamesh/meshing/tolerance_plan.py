@@ -12,10 +12,11 @@ straight rulings), A bounds |d^2 x / dt^2| and B |d^2 x / dt dtheta| over the qu
 term) and k' the chord's length per unit of r (2 sin(pi / M)) or the fraction across (1 / (N - 1)).
 A and B come from bounds of the members' derivatives per cell of a dense sampling
 (cgamesh.meshing.derivative_bounds): for circles |c''|, |r'|, |r''|, |n'|, |n''| and the
-frame's angular velocity; for ribbons |a''|, |b''| and |(b - a)'|. For circles a second bound
-counts only the twist's part across the surface (a reparametrisation of each triangle removes
-its shear along P_t and P_theta; docs/tolerance.md, "The twist's normal part"): an interval's E
-is the smaller of the two.
+frame's angular velocity; for ribbons |a''|, |b''| and |(b - a)'|. For circles two more bounds
+count only the twist's part across the surface: a reparametrisation of each triangle removes
+its shear along P_t and P_theta (docs/tolerance.md, "The twist's normal part"), and the error
+is projected on the surface's normal, its tangential part costing only the curvature over a
+short step (cgamesh.meshing.normal_projection): an interval's E is the smallest of the three.
 
 From these, per cell and for each candidate count around, the spacing h whose bound meets the
 tolerance gives a ring density 1 / h; its integral per segment is the ring count, so the count
@@ -58,6 +59,9 @@ COARSE_STRIDE = 4
 ANGLES = 32
 # Rounds of raising the density where an interval's bound misses, before splitting it.
 DENSITY_ROUNDS = 4
+# Rings are placed again with a lowered density when their intervals' bounds average below
+# this share of the tolerance.
+RELAX_BELOW = 0.85
 # A closed loop's holonomy rate is bounded again at most this often, with this margin.
 HOLONOMY_ROUNDS = 6
 HOLONOMY_MARGIN = 1.05
@@ -504,24 +508,23 @@ def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarr
     surface, kind, closed = family.surface, family.kind, family.closed
     names = sorted(cells.terms)
     table = _RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1))
-    t = None
-    for _ in range(DENSITY_ROUNDS):
-        t = _place(density, counts, cells.cells)
-        error, first, last, _ = _interval_errors(family, cells, table, names, t, around)
-        missed = error > tolerance
-        if not np.any(missed):
-            break
-        # Raise the density over the cells of the intervals that miss, as the error would need.
-        factor = np.ones(density.size)
-        raise_by = np.sqrt(np.minimum(error[missed] / tolerance, 4.0)) * 1.02
-        lengths = last[missed] - first[missed] + 1
-        touched = np.repeat(first[missed] - np.cumsum(lengths) + lengths, lengths) + np.arange(lengths.sum())
-        np.maximum.at(factor, touched, np.repeat(raise_by, lengths))
-        density = density * factor.reshape(density.shape)
-        counts = _ring_counts(density, cells.cells)
-        if counts.sum() + 1 > MAX_RINGS:
-            break
+    t, density = _raised(family, cells, table, names, around, density, counts, tolerance)
     t, bound = _split_missed(family, cells, table, names, t, around, tolerance)
+    error, first, last, _ = _interval_errors(family, cells, table, names, t, around)
+    if np.mean(error) < RELAX_BELOW * tolerance:
+        # The leading-term spacing was pessimistic here (most intervals' bound is well below the
+        # tolerance): lower the density over each cell as its intervals' bounds allow (E grows
+        # about as h^2), place again, and keep whichever placement has fewer rings.
+        factor = np.zeros(density.size)
+        lengths = last - first + 1
+        touched = np.repeat(first - np.cumsum(lengths) + lengths, lengths) + np.arange(lengths.sum())
+        np.maximum.at(factor, touched, np.repeat(np.sqrt(np.clip(error / tolerance, 1.0 / 16.0, 1.0)), lengths))
+        lowered = density * np.where(factor > 0.0, factor, 1.0).reshape(density.shape)
+        relaxed, _ = _raised(family, cells, table, names, around, lowered, _ring_counts(lowered, cells.cells),
+                             tolerance)
+        relaxed, relaxed_bound = _split_missed(family, cells, table, names, relaxed, around, tolerance)
+        if len(relaxed) < len(t):
+            t, bound = relaxed, relaxed_bound
     if kind == "circles" and closed:
         # The loop's frames are turned by the holonomy of these rings' transport, spread evenly:
         # bound again with its rate until the rate assumed covers it.
@@ -535,6 +538,28 @@ def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarr
         else:
             raise InvalidInputError(f"surface '{surface.name}': the closed loop's frame holonomy does not settle")
     return TolerancePlan(around, t, bound)
+
+
+def _raised(family, cells, table, names, around, density, counts, tolerance):
+    """(rings equidistributing ``density``, the density): raised over the cells of the intervals
+    whose bound misses, as their error needs, and placed again (at most DENSITY_ROUNDS times)."""
+    t = None
+    for _ in range(DENSITY_ROUNDS):
+        t = _place(density, counts, cells.cells)
+        error, first, last, _ = _interval_errors(family, cells, table, names, t, around)
+        missed = error > tolerance
+        if not np.any(missed):
+            break
+        factor = np.ones(density.size)
+        raise_by = np.sqrt(np.minimum(error[missed] / tolerance, 4.0)) * 1.02
+        lengths = last[missed] - first[missed] + 1
+        touched = np.repeat(first[missed] - np.cumsum(lengths) + lengths, lengths) + np.arange(lengths.sum())
+        np.maximum.at(factor, touched, np.repeat(raise_by, lengths))
+        density = density * factor.reshape(density.shape)
+        counts = _ring_counts(density, cells.cells)
+        if counts.sum() + 1 > MAX_RINGS:
+            break
+    return t, density
 
 
 def _split_missed(family, cells, table, names, t, around, tolerance):
