@@ -44,12 +44,14 @@ def full_second_derivatives(terms: dict, spin, spin_rate, prefix: str = ""):
 
 
 def tilt_bound(terms: dict):
-    """(axial, tilt): a lower bound of |n . x_t| and an upper bound of |N . n| (the surface normal's
-    component along the circle's axis, (|n x c'| + |r'|) / |n . x_t|), at most 1."""
+    """(axial, tilt): a lower bound of |n . x_t| and an upper bound of |N . n|, the surface normal's
+    component along the circle's axis: |x_t . rho| / sqrt((x_t . n)^2 + (x_t . rho)^2), which grows
+    with |x_t . rho| <= |n x c'| + |r'| and falls with |x_t . n| >= axial."""
     axial = -terms["negCn"] - terms["Rm"] * terms["N1"]
+    radial = terms["Cx"] + terms["R1"]
     with np.errstate(divide="ignore", invalid="ignore"):
-        tilt = np.where(axial > 0.0, np.minimum(1.0, (terms["Cx"] + terms["R1"]) / axial), 1.0)
-    return axial, tilt
+        tilt = np.where(axial > 0.0, radial / np.sqrt(radial * radial + axial * axial), 1.0)
+    return axial, np.minimum(np.nan_to_num(tilt, nan=1.0), 1.0)
 
 
 def normal_twist(terms: dict, h, around, spin, tilt):
