@@ -138,12 +138,13 @@ COMPARED = [pytest.param(path, index, marks=FLAT_RIBBON if (path.stem, index) ==
             for path, index in CASES]
 
 
-# Cases over twice the smallest uniform grid, each a known shortfall of the bound. A case that
-# comes within twice fails here, to be taken off the list. (The motor hairpin, motor_tube[1],
-# left it at 1e-2 when the twist's normal part came to be bounded by the projection on the
-# surface's normal; its uniform grids' deviation does not fall monotonically with the ring
-# count, so the bisection's grid is not always the smallest: docs/accuracy.md.)
-OVER_TWICE: set[tuple[str, int, float]] = set()
+# Cases over twice the smallest uniform grid, each a known shortfall of the bound: the motor
+# hairpin (motor_tube[1]) at 1e-2, whose rotation terms the bound counts in full
+# (docs/tolerance.md). A case that comes within twice fails here, to be taken off the list.
+# (The hairpin's uniform grids' deviation does not fall monotonically with the ring count, so
+# the grid the bisection finds depends on the count around: with 23 around it found 61 rings,
+# with 19 it finds 9; docs/accuracy.md.)
+OVER_TWICE = {("motor_tube", 1, 1e-2)}
 
 
 @pytest.mark.parametrize("relative", [1e-2, 1e-3])  # 1e-4: benchmarks/report_accuracy.py --compare-only
