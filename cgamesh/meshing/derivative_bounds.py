@@ -11,12 +11,19 @@ component by component):
     D2_i = (f_i+1 - 2 f_i + f_i-1) / delta^2              = f''(xi),  xi in [t_i-1, t_i+1]
     D3_i = (f_i+2 - 3 f_i+1 + 3 f_i - f_i-1) / delta^3    = f'''(xi), xi in [t_i-1, t_i+2]
 
-Every point of cell i is within 2 delta of the points where the neighbouring D2 were taken,
-so |f''| <= |D2| + 2 delta L3 there, where L3 bounds |f'''| over the neighbourhood; L3 is
-LIPSCHITZ_SAFETY times the largest neighbouring |D3| (f''' itself varies between the samples;
-the factor covers that variation, which is what the property tests check). Likewise
-|f'| <= |D1| + delta |f''|. A rounding allowance for the differences of float64 read-outs is
-added. Differences never straddle a joint: each segment is sampled and differenced on its own.
+The differences are also weighted means of the derivatives (their Peano kernels):
+
+    D2_i = integral over s in [-1, 1] of f''(t_i + s delta) (1 - |s|) ds,
+    D1_i = integral over s in [0, 1] of f'(t_i + s delta) ds,
+
+so at a point x, |f''(x) - D2_i| <= L3 (|x - t_i| + delta / 3) (the hat kernel's mean |s| is
+1/3), where L3 bounds |f'''| over the neighbourhood: a point of cell i is within delta / 2 of
+sample i or i + 1 (within delta of the one inside, in a segment's end cells). Likewise
+|f'(x) - D1_i| <= (delta / 2) max |f''| over the cell. L3 is LIPSCHITZ_SAFETY times the
+largest neighbouring |D3| (f''' itself varies between the samples; the factor covers that
+variation, which is what the property tests check). A rounding allowance for the differences
+of float64 read-outs is added. Differences never straddle a joint: each segment is sampled and
+differenced on its own.
 """
 
 from __future__ import annotations
@@ -81,13 +88,20 @@ def cell_derivatives(values: np.ndarray) -> CellDerivatives:
     entries = np.clip(cell[:, None] + np.arange(-2, 1)[None, :], 0, d3.shape[1] - 1)  # (S, 3)
     third = LIPSCHITZ_SAFETY * d3[:, entries].max(axis=2)
 
-    # f'' at a point of cell i is within 2 delta of where D2 at samples i and i+1 were taken
-    # (at the ends of a segment, the one inside: cell 0 uses D2 at sample 1, the last cell at S-1).
+    # A point of cell i is within delta / 2 of sample i or i+1, where D2 (a hat-weighted mean of
+    # f'' over one spacing each side, mean distance delta / 3) was taken; at the ends of a
+    # segment only the sample inside has a D2, within delta (cell 0 uses D2 at sample 1, the
+    # last cell at S-1). So f'' there is within half their difference plus
+    # (distance + delta / 3) L3 of their mean.
     second_at = np.concatenate([d2[:, :1], d2, d2[:, -1:]], axis=1)  # index j <-> D2 at sample j
     left, right = second_at[:, :-1], second_at[:, 1:]
     second = 0.5 * (left + right)
-    second_radius = 0.5 * np.abs(left - right) + 2.0 * delta * third + 4.0 * rounding / delta ** 2
-    first_radius = delta * (np.abs(second) + second_radius) + 2.0 * rounding / delta
+    reach = np.full(cells, 0.5 * delta)
+    reach[[0, -1]] = delta
+    second_radius = (0.5 * np.abs(left - right) + (reach + delta / 3.0)[None, :, None] * third
+                     + 4.0 * rounding / delta ** 2)
+    # D1 is the mean of f' over the cell: f' anywhere in it is within (delta / 2) max |f''|.
+    first_radius = 0.5 * delta * (np.abs(second) + second_radius) + 2.0 * rounding / delta
     value = np.maximum(np.abs(values[:, :-1]), np.abs(values[:, 1:])) + 0.5 * delta * (np.abs(d1) + first_radius)
     return CellDerivatives(value, d1, first_radius, second, second_radius)
 

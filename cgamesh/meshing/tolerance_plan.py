@@ -12,10 +12,11 @@ straight rulings), A bounds |d^2 x / dt^2| and B |d^2 x / dt dtheta| over the qu
 term) and k' the chord's length per unit of r (2 sin(pi / M)) or the fraction across (1 / (N - 1)).
 A and B come from bounds of the members' derivatives per cell of a dense sampling
 (cgamesh.meshing.derivative_bounds): for circles |c''|, |r'|, |r''|, |n'|, |n''| and the
-frame's angular velocity; for ribbons |a''|, |b''| and |(b - a)'|. For circles a second bound
-counts only the twist's part across the surface (a reparametrisation of each triangle removes
-its shear along P_t and P_theta; docs/tolerance.md, "The twist's normal part"): an interval's E
-is the smaller of the two.
+frame's angular velocity; for ribbons |a''|, |b''| and |(b - a)'|. For circles two more bounds
+count only the twist's part across the surface: a reparametrisation of each triangle removes
+its shear along P_t and P_theta (docs/tolerance.md, "The twist's normal part"), and the error
+is projected on the surface's normal, its tangential part costing only the curvature over a
+short step (cgamesh.meshing.normal_projection): an interval's E is the smallest of the three.
 
 From these, per cell and for each candidate count around, the spacing h whose bound meets the
 tolerance gives a ring density 1 / h; its integral per segment is the ring count, so the count
@@ -38,7 +39,9 @@ from cgamesh.errors import InvalidInputError
 from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
 from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.meshing.circles import transported_frames
+from cgamesh.meshing.dense_transport import transported_axes
 from cgamesh.meshing.derivative_bounds import cell_bounds, cell_derivatives, segment_samples
+from cgamesh.meshing.normal_projection import normal_projection_error, normal_projection_spacing
 
 # Cells per segment of the derivative sampling: at least this many, and about this many per
 # ring of a first estimate (the Lipschitz margin shrinks with the cells; the cost grows).
@@ -50,10 +53,15 @@ SAMPLE_CHUNK = 512
 # Counts around / across tried when choosing the split of the tolerance.
 AROUND_CANDIDATES = 48
 MAX_ACROSS = 64
+# Candidates priced in the first, coarse pass of the choice (every this many).
+COARSE_STRIDE = 4
 # Angles at which the largest |d2x/dt2| around a circle is looked for (plus a margin between).
 ANGLES = 32
 # Rounds of raising the density where an interval's bound misses, before splitting it.
 DENSITY_ROUNDS = 4
+# Rings are placed again with a lowered density when their intervals' bounds average below
+# this share of the tolerance.
+RELAX_BELOW = 0.85
 # A closed loop's holonomy rate is bounded again at most this often, with this margin.
 HOLONOMY_ROUNDS = 6
 HOLONOMY_MARGIN = 1.05
@@ -110,7 +118,7 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
     between the centre's, the radius' and the frame's parts), the largest radius, |n'| and |n''|."""
     t = segment_samples(surface.segment_count, cells)
     centre, normal, radius = circle_euclidean(_read(surface, t.ravel()))
-    u, v = transported_frames(normal, False, t.ravel())
+    u, v = transported_axes(normal)
     shape = t.shape
     scale = surface.frame.scale
     grid = lambda values: values.reshape(shape + values.shape[1:])  # noqa: E731
@@ -120,13 +128,17 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
     r0, _, _ = cell_bounds(grid(radius[:, None]))
     _, n1, n2 = cell_bounds(grid(normal))
     norm = lambda x: np.sqrt(np.sum(x * x, axis=-1))  # noqa: E731
-    # max over theta of |a + B cos theta + C sin theta|: on ANGLES angles, plus the most it can
-    # grow between two of them.
+    # max over theta of |G| = |a + B cos theta + C sin theta|: on ANGLES angles, plus the most
+    # g = |G|^2 can grow from the nearest of them to a maximum between (where g' = 0):
+    # (spacing^2 / 8) max |g''|, with g'' = 2 |G'|^2 + 2 G . G'' and |G'|, |G''| <= reach.
     a, b, c = path.second, cosine.second, sine.second
     angles = 2.0 * np.pi * np.arange(ANGLES) / ANGLES
     on_circle = norm(a[..., None, :] + np.cos(angles)[:, None] * b[..., None, :] + np.sin(angles)[:, None] * c[..., None, :])
     reach = np.sqrt(norm(b) ** 2 + norm(c) ** 2)
-    along = (on_circle.max(axis=-1) + reach * np.pi / ANGLES + norm(path.second_radius)
+    curvature = 4.0 * reach * reach + 2.0 * norm(a) * reach  # >= max |g''|
+    spacing = 2.0 * np.pi / ANGLES
+    largest = np.sqrt(on_circle.max(axis=-1) ** 2 + spacing * spacing / 8.0 * curvature)
+    along = (largest + norm(path.second_radius)
              + np.hypot(norm(cosine.second_radius), norm(sine.second_radius)))
     # max over theta of |-sin theta B1 + cos theta C1|: the larger singular value of [B1 C1].
     b1, c1 = cosine.first, sine.first
@@ -184,13 +196,15 @@ def _ribbon_cells(surface: EvolvedSurface, cells: int) -> _Cells:
     return _Cells(cells, dict(A=scale * np.maximum(a2, b2), B=scale * d1), 0.0)
 
 
-def _circle_error(terms: dict, h, around, rate: float):
+def _circle_error(terms: dict, h, around, rate: float, wide: dict | None = None):
     """E for intervals of length h with the given term maxima and M = around (broadcasting).
 
     The mesh's frame on an interval is the smallest rotation from the first ring's plane,
     which spins about n relative to the sampled transport by psi' (at most turned |n'| / q,
     plus a closed loop's holonomy rate): x(t, theta) = x_G(t, theta + psi(t)) adds
-    2 B psi' + r (psi'^2 + |psi''|) to A and r psi' to B."""
+    2 B psi' + r (psi'^2 + |psi''|) to A and r psi' to B. With ``wide`` (the maxima over each
+    interval widened within its segment), the bound by the error normal to the surface
+    (cgamesh.meshing.normal_projection) is a third one: E is the smallest."""
     n1, n2, rm = terms["N1"], terms["N2"], terms["Rm"]
     turned = h * n1  # bounds |n(t) - n(t_k)| over the interval
     q = 2.0 - 0.5 * turned * turned  # <= 1 + n(t_k) . n(t)
@@ -202,6 +216,8 @@ def _circle_error(terms: dict, h, around, rate: float):
         sag = rm * (1.0 - np.cos(np.pi / around))
         error = sag + a * h * h / 8.0 + b * h * np.sin(np.pi / around) / 2.0
         error = np.minimum(error, sag + _normal_twist_error(terms, h, around, a, b, spin, spin_rate))
+    if wide is not None:
+        error = np.minimum(error, normal_projection_error(terms, wide, h, around, rate))
     return np.where(turned < 1.0, error, np.inf)
 
 
@@ -262,7 +278,8 @@ def _circle_spacing(terms: dict, around, tolerance: float, rate: float):
     # h |gamma_theta| <= 1 is checked when the rings are bounded.
     square, linear, valid = _normal_twist_terms(terms, around, full, twist, rate, 0.0)
     normal = np.where(valid, _root(np.where(valid, square, 1.0), np.where(valid, linear, 1.0), c), 0.0)
-    return np.maximum(spacing, normal)
+    projected = normal_projection_spacing(terms, around, tolerance, rate, _root)
+    return np.maximum(np.maximum(spacing, normal), projected)
 
 
 def _ribbon_spacing(terms: dict, across, tolerance: float, rate: float = 0.0):
@@ -294,8 +311,10 @@ class _Surface:
             return _circle_cells(self.surface, count, self.closed)
         return _ribbon_cells(self.surface, count)
 
-    def error(self, terms, h, around, rate):
-        return (_circle_error if self.kind == "circles" else _ribbon_error)(terms, h, around, rate)
+    def error(self, terms, h, around, rate, wide=None):
+        if self.kind == "circles":
+            return _circle_error(terms, h, around, rate, wide)
+        return _ribbon_error(terms, h, around, rate)
 
     def spacing(self, terms, around, tolerance, rate):
         return (_circle_spacing if self.kind == "circles" else _ribbon_spacing)(terms, around, tolerance, rate)
@@ -321,8 +340,23 @@ class _Surface:
 
 
 def _choose_counts(family: _Surface, cells: _Cells, tolerance: float) -> tuple[int, np.ndarray, np.ndarray]:
-    """(around, density (segments, cells), intervals per segment) minimising planned vertices."""
+    """(around, density (segments, cells), intervals per segment) minimising planned vertices.
+
+    The planned vertices against the count around fall, then rise (the sag's share of the
+    tolerance against the rings'): every COARSE_STRIDE-th candidate is priced first, then every
+    candidate between the best one's neighbours."""
     options = family.candidates(cells, tolerance)
+    coarse = np.unique(np.append(np.arange(0, len(options), COARSE_STRIDE), len(options) - 1))
+    best = coarse[_price(family, cells, tolerance, options[coarse])[0]]
+    position = int(np.searchsorted(coarse, best))
+    low, high = coarse[max(position - 1, 0)], coarse[min(position + 1, len(coarse) - 1)]
+    fine = options[low:high + 1]
+    chosen, density, counts = _price(family, cells, tolerance, fine)
+    return int(fine[chosen]), density, counts
+
+
+def _price(family: _Surface, cells: _Cells, tolerance: float, options: np.ndarray):
+    """(index of the option with the fewest planned vertices, its density, its counts)."""
     terms = {k: v[None] for k, v in cells.terms.items()}
     with np.errstate(divide="ignore"):
         density = 1.0 / family.spacing(terms, options[:, None, None], tolerance, cells.closed_rate)
@@ -335,7 +369,7 @@ def _choose_counts(family: _Surface, cells: _Cells, tolerance: float) -> tuple[i
         raise InvalidInputError(
             f"tolerance {tolerance:.3g} is too small for surface '{family.surface.name}': "
             f"it needs more than {MAX_RINGS} rings")
-    return int(options[best]), density[best], counts[best]
+    return best, density[best], counts[best]
 
 
 def _neighbourhood_max(density: np.ndarray) -> np.ndarray:
@@ -394,7 +428,24 @@ def _interval_errors(family: _Surface, cells: _Cells, table: _RangeMax, names, t
     last = np.clip(np.ceil(t[1:] * cells.cells).astype(np.int64) - 1, first, n - 1)
     maxima = table.query(first, last)
     terms = {name: maxima[:, i] for i, name in enumerate(names)}
-    return family.error(terms, np.diff(t), around, cells.closed_rate), first, last, terms
+    h = np.diff(t)
+    wide = _widened(cells, table, names, t) if family.kind == "circles" else None
+    return family.error(terms, h, around, cells.closed_rate, wide), first, last, terms
+
+
+def _widened(cells: _Cells, table: _RangeMax, names, t: np.ndarray) -> dict:
+    """Per interval the term maxima over it widened by ``margin`` = min(h, its distance to its
+    segment's ends) on each side: where the normal projection's step along t may reach (never
+    across a joint, where the members are not twice differentiable)."""
+    segment = np.clip(np.floor(t[:-1]), 0, cells.segments - 1)
+    margin = np.maximum(np.minimum(np.minimum(np.diff(t), t[:-1] - segment), segment + 1.0 - t[1:]), 0.0)
+    low, high = segment * cells.cells, (segment + 1) * cells.cells - 1
+    first = np.clip(np.floor((t[:-1] - margin) * cells.cells), low, high).astype(np.int64)
+    last = np.clip(np.ceil((t[1:] + margin) * cells.cells) - 1, first, high).astype(np.int64)
+    maxima = table.query(first, last)
+    wide = {name: maxima[:, i] for i, name in enumerate(names)}
+    wide["margin"] = margin
+    return wide
 
 
 def _plan(family: _Surface, tolerance: float) -> tuple[_Cells, int, np.ndarray, np.ndarray]:
@@ -457,24 +508,23 @@ def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarr
     surface, kind, closed = family.surface, family.kind, family.closed
     names = sorted(cells.terms)
     table = _RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1))
-    t = None
-    for _ in range(DENSITY_ROUNDS):
-        t = _place(density, counts, cells.cells)
-        error, first, last, _ = _interval_errors(family, cells, table, names, t, around)
-        missed = error > tolerance
-        if not np.any(missed):
-            break
-        # Raise the density over the cells of the intervals that miss, as the error would need.
-        factor = np.ones(density.size)
-        raise_by = np.sqrt(np.minimum(error[missed] / tolerance, 4.0)) * 1.02
-        lengths = last[missed] - first[missed] + 1
-        touched = np.repeat(first[missed] - np.cumsum(lengths) + lengths, lengths) + np.arange(lengths.sum())
-        np.maximum.at(factor, touched, np.repeat(raise_by, lengths))
-        density = density * factor.reshape(density.shape)
-        counts = _ring_counts(density, cells.cells)
-        if counts.sum() + 1 > MAX_RINGS:
-            break
+    t, density = _raised(family, cells, table, names, around, density, counts, tolerance)
     t, bound = _split_missed(family, cells, table, names, t, around, tolerance)
+    error, first, last, _ = _interval_errors(family, cells, table, names, t, around)
+    if np.mean(error) < RELAX_BELOW * tolerance:
+        # The leading-term spacing was pessimistic here (most intervals' bound is well below the
+        # tolerance): lower the density over each cell as its intervals' bounds allow (E grows
+        # about as h^2), place again, and keep whichever placement has fewer rings.
+        factor = np.zeros(density.size)
+        lengths = last - first + 1
+        touched = np.repeat(first - np.cumsum(lengths) + lengths, lengths) + np.arange(lengths.sum())
+        np.maximum.at(factor, touched, np.repeat(np.sqrt(np.clip(error / tolerance, 1.0 / 16.0, 1.0)), lengths))
+        lowered = density * np.where(factor > 0.0, factor, 1.0).reshape(density.shape)
+        relaxed, _ = _raised(family, cells, table, names, around, lowered, _ring_counts(lowered, cells.cells),
+                             tolerance)
+        relaxed, relaxed_bound = _split_missed(family, cells, table, names, relaxed, around, tolerance)
+        if len(relaxed) < len(t):
+            t, bound = relaxed, relaxed_bound
     if kind == "circles" and closed:
         # The loop's frames are turned by the holonomy of these rings' transport, spread evenly:
         # bound again with its rate until the rate assumed covers it.
@@ -488,6 +538,28 @@ def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarr
         else:
             raise InvalidInputError(f"surface '{surface.name}': the closed loop's frame holonomy does not settle")
     return TolerancePlan(around, t, bound)
+
+
+def _raised(family, cells, table, names, around, density, counts, tolerance):
+    """(rings equidistributing ``density``, the density): raised over the cells of the intervals
+    whose bound misses, as their error needs, and placed again (at most DENSITY_ROUNDS times)."""
+    t = None
+    for _ in range(DENSITY_ROUNDS):
+        t = _place(density, counts, cells.cells)
+        error, first, last, _ = _interval_errors(family, cells, table, names, t, around)
+        missed = error > tolerance
+        if not np.any(missed):
+            break
+        factor = np.ones(density.size)
+        raise_by = np.sqrt(np.minimum(error[missed] / tolerance, 4.0)) * 1.02
+        lengths = last[missed] - first[missed] + 1
+        touched = np.repeat(first[missed] - np.cumsum(lengths) + lengths, lengths) + np.arange(lengths.sum())
+        np.maximum.at(factor, touched, np.repeat(raise_by, lengths))
+        density = density * factor.reshape(density.shape)
+        counts = _ring_counts(density, cells.cells)
+        if counts.sum() + 1 > MAX_RINGS:
+            break
+    return t, density
 
 
 def _split_missed(family, cells, table, names, t, around, tolerance):
