@@ -56,9 +56,16 @@ _FLOW_ATOM = r'(?:[-+0-9.eE, ]++|"[A-Za-z_][A-Za-z0-9_]*: )'
 _FLAT_LIST = rf"\[{_FLOW_ATOM}*+\]"
 _NESTED_LIST = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*+\]"
 _FLOW = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*+\]|\{{(?:{_FLOW_ATOM}|{_NESTED_LIST})*+\}}"
-# indent, '- ', key, then a flow value, a number, a name, or anything else (outside the subset).
-_LINE = re.compile(rf'^( *)(- +)?(?:({_IDENTIFIER}):(?: +|$))?'
-                   rf'(?:({_FLOW})|({_NUMBER})|({_IDENTIFIER})|([^\n]+))? *$', re.M)
+# A block list of numbers under a key, one per line (as PyYAML's block style writes every
+# list): matched with its key as one piece, so that its lines cost no Python work each. The
+# items are numerals by this loose class; json.loads then enforces the exact grammar (which
+# is _NUMBER's), so anything else makes the JSON invalid and the file falls back.
+_RUN = r"\n( *)- [-+.0-9eE]++ *+(?:\n\8- [-+.0-9eE]++ *+)*+"
+# indent, the dashes ('- ', or '- - ' for a list in a list), key, then a flow value, a number,
+# a name, a run (only after a key with nothing after it), or anything else (outside the subset).
+_LINE = re.compile(rf'^( *)((?:- +)+)?(?:({_IDENTIFIER}):(?: +|$))?'
+                   rf'(?:({_FLOW})|({_NUMBER})|({_IDENTIFIER})|(?(3)({_RUN})|(?!))|([^\n]+))? *$',
+                   re.M)
 # YAML 1.2 core-schema words (the careful reader's resolution) as JSON literals.
 _WORDS = {word: literal for literal, words in (("true", ("true", "True", "TRUE")),
                                                ("false", ("false", "False", "FALSE")),
@@ -105,8 +112,7 @@ def _plain_document(text: str) -> tuple[dict, int] | None:
     if text is None:
         return None
     try:
-        pieces = _json_pieces(_LINE.findall(text))
-        document = "".join(pieces)
+        document = "".join(_json_pieces(_LINE.findall(text))).replace(": ", '": ')
         # Every key ends in '":' (a block key as written here, a flow key once its ': ' is
         # quoted); the line markers are '"":'.
         keys = document.count('":') - document.count('"":')
@@ -137,8 +143,10 @@ def _keys_quoted(text: str) -> str | None:
 
 
 def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
-    """JSON text of the block structure; each line is (indent, dash, key, flow, number, name,
-    other) as ``_LINE`` splits it. Raises _OutsideSubset for anything the subset leaves out.
+    """JSON text of the block structure; each line is (indent, dashes, key, flow, number, name,
+    run, run indent, other) as ``_LINE`` splits it. Raises _OutsideSubset for anything the
+    subset leaves out. The keys of flow mappings are left as ``"key: `` (the caller closes
+    their quotes in one pass over the whole text).
 
     The innermost open block collection is (``mapping``, ``column``, ``items``): a mapping's
     column is that of its keys, a list's that of its dashes, ``items`` whether it has one yet
@@ -150,7 +158,7 @@ def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
     mapping, column_open, items = True, -1, False  # column -1: the document is not open yet
     pending = -1
     number = 0
-    for indent, dash, key, flow, numeral, name, other in lines:
+    for indent, dash, key, flow, numeral, name, run, run_indent, other in lines:
         number += 1
         if other:
             raise _OutsideSubset(number)
@@ -181,9 +189,17 @@ def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
             append(",")
         items = True
         if dash:
+            if len(dash) > 3 and dash.count("-") > 1:
+                # '- - x': each dash after the first opens a list, the item of the one before,
+                # at the dash's column.
+                for inner in _DASHES.findall(dash)[:-1]:
+                    column += len(inner)
+                    dash = dash[len(inner):]
+                    outer.append((mapping, column_open, True))
+                    mapping, column_open = False, column
+                    append("[")
             if not key:
                 if flow:
-                    flow = flow.replace(": ", '": ')
                     # A flow mapping as a list item: its line goes in first.
                     append(f'{{"":{number},{flow[1:]}' if flow[0] == "{" else flow)
                 elif numeral:
@@ -201,11 +217,18 @@ def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
         else:
             append(f'"{key}":')
         if flow:
-            append(flow.replace(": ", '": '))
+            append(flow)
         elif numeral:
             append(numeral)
         elif name:
             append(_WORDS.get(name) or f'"{name}"')
+        elif run:
+            # A block list of numbers on the lines after the key, indented at least as far
+            # as the key (else the list is not the key's value: the careful reader decides).
+            if len(run_indent) < column_open:
+                raise _OutsideSubset(number)
+            append(f'[{run.replace(run[:len(run_indent) + 3], ",")[1:]}]')
+            number += run.count("\n")
         else:
             pending = column_open
     if column_open < 0:
@@ -215,6 +238,9 @@ def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
     append("}" if mapping else "]")
     out.extend("}" if frame[0] else "]" for frame in reversed(outer))
     return out
+
+
+_DASHES = re.compile(r"- +")
 
 
 # --- checks over the plain data ----------------------------------------------------------------
