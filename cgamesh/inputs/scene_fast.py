@@ -30,7 +30,8 @@ import gc
 import json
 import re
 from collections import deque
-from itertools import repeat
+from itertools import chain, repeat
+from operator import itemgetter
 
 import numpy as np
 
@@ -441,6 +442,8 @@ class _Controls:
     def add(self, items: object, kind: str, curve: str, closed: bool, key_path: str) -> None:
         _check(type(items) is list and len(items) >= (3 if closed else 2))
         circles = kind == "circles"
+        if self._add_plain(items, circles, key_path):
+            return
         allowed = _CIRCLE_KEYS_LINE if circles else _POINT_PAIR_KEYS_LINE
         rational = curve == "rational_bezier"
         weights = []
@@ -477,57 +480,95 @@ class _Controls:
             largest = max(weights)
             _check(all(weight * careful.MAX_WEIGHT_RATIO >= largest for weight in weights))
 
+    def _add_plain(self, items: list, circles: bool, key_path: str) -> bool:
+        """Add ``items`` if every one is a mapping of exactly the plain keys (center, normal
+        and radius; a and b), by C-level maps over the list; False (nothing added) if not."""
+        row, width = (_CIRCLE_ROW, 4) if circles else (_PAIR_ROW, 3)
+        try:
+            rows = list(map(row, items))
+        except (KeyError, TypeError):  # a key missing, or an item that is not a mapping
+            return False
+        count = len(rows)
+        if sum(map(len, items)) != width * count:  # a key more than the plain ones
+            return False
+        columns = tuple(zip(*rows))
+        self.lines += columns[0]
+        if circles:
+            self.centers += columns[1]
+            self.normals += columns[2]
+            self.radii += columns[3]
+        else:
+            self.ends_a += columns[1]
+            self.ends_b += columns[2]
+        self.keys_seen += (width - 1) * count
+        self.key_paths += map(key_path.__add__, _control_suffixes(count))
+        self.weights += repeat(1.0, count)
+        self.forms += repeat(_CIRCLE if circles else _PAIR, count)
+        return True
+
     def build(self) -> list[CircleControl | PointPairControl]:
         """The specs, in file order, once every number has passed."""
-        centers = _lengths(self.centers, (len(self.centers), 3))
-        normals = _numbers(self.normals, (len(self.normals), 3))
-        _check(bool(np.all(np.any(normals != 0.0, axis=1))))
-        radii = _lengths(self.radii, (len(self.radii),))
-        _check(bool(np.all(radii > 0.0)))
-        ends_a = _lengths(self.ends_a, (len(self.ends_a), 3))
-        ends_b = _lengths(self.ends_b, (len(self.ends_b), 3))
-        for i in np.flatnonzero(_maybe_coincident(ends_a, ends_b)):
-            _check(not careful._coincident(tuple(ends_a[i].tolist()), tuple(ends_b[i].tolist())))
-        count = len(self.forms)
-        locations = _instances(Location, ("file", "line", "key_path"),
-                               zip(repeat(self.path, count), self.lines, self.key_paths))
-        forms = np.array(self.forms, dtype=np.int8)
-        parts = {}
-        for form, cls, keys, columns in (
-                (_CIRCLE, CircleControl, _CIRCLE_FIELDS,
-                 lambda n: (map(tuple, centers.tolist()), map(tuple, normals.tolist()),
-                            radii.tolist(), repeat(None, n))),
-                (_PAIR, PointPairControl, _PAIR_FIELDS,
-                 lambda n: (map(tuple, ends_a.tolist()), map(tuple, ends_b.tolist()))),
-                (_THROUGH, CircleControl, _CIRCLE_FIELDS,
-                 lambda n: (repeat(None, n), repeat(None, n), repeat(None, n), self.throughs))):
-            where = np.flatnonzero(forms == form).tolist()
-            if where:
-                weights = [self.weights[i] for i in where]
-                mine = [locations[i] for i in where]
-                parts[form] = (where, _instances(cls, keys, zip(*columns(len(where)), weights, mine)))
-        if len(parts) == 1:
-            return next(iter(parts.values()))[1]
-        built = [None] * count
-        for where, instances in parts.values():
-            for i, instance in zip(where, instances):
-                built[i] = instance
+        centers_array, centers = _vectors(self.centers)
+        normals_array, normals = _vectors(self.normals)
+        radii_array, radii = _floats(self.radii)
+        ends_a_array, ends_a = _vectors(self.ends_a)
+        ends_b_array, ends_b = _vectors(self.ends_b)
+        _check(_within_limit(centers_array) and _within_limit(radii_array)
+               and _within_limit(ends_a_array) and _within_limit(ends_b_array))
+        _check(bool(np.all(np.any(normals_array != 0.0, axis=1))))
+        _check(bool(np.all(radii_array > 0.0)))
+        for i in np.flatnonzero(_maybe_coincident(ends_a_array, ends_b_array)).tolist():
+            _check(not careful._coincident(ends_a[i], ends_b[i]))
+        path = self.path
+        locations = _with_fields(Location, [{"file": path, "line": line, "key_path": key_path}
+                                            for line, key_path in zip(self.lines, self.key_paths)])
+        forms = self.forms
+        count = len(forms)
+        circles = forms.count(_CIRCLE)
+        if circles == count:  # the common case: every control a circle given by its center
+            return _with_fields(CircleControl, [
+                {"center": center, "normal": normal, "radius": radius, "through": None,
+                 "weight": weight, "location": location}
+                for center, normal, radius, weight, location
+                in zip(centers, normals, radii, self.weights, locations)])
+        if forms.count(_PAIR) == count:
+            return _with_fields(PointPairControl, [
+                {"a": a, "b": b, "weight": weight, "location": location}
+                for a, b, weight, location in zip(ends_a, ends_b, self.weights, locations)])
+        built = []
+        circle, pair, through = iter(zip(centers, normals, radii)), iter(zip(ends_a, ends_b)), iter(self.throughs)
+        for form, weight, location in zip(forms, self.weights, locations):
+            if form == _PAIR:
+                a, b = next(pair)
+                fields = {"a": a, "b": b, "weight": weight, "location": location}
+            else:
+                center, normal, radius = next(circle) if form == _CIRCLE else (None, None, None)
+                fields = {"center": center, "normal": normal, "radius": radius,
+                          "through": next(through) if form == _THROUGH else None,
+                          "weight": weight, "location": location}
+            built.append(_frozen(PointPairControl if form == _PAIR else CircleControl, fields))
         return built
 
 
 _CIRCLE, _PAIR, _THROUGH = 0, 1, 2
-_CIRCLE_FIELDS = ("center", "normal", "radius", "through", "weight", "location")
-_PAIR_FIELDS = ("a", "b", "weight", "location")
+_CIRCLE_ROW = itemgetter("", "center", "normal", "radius")
+_PAIR_ROW = itemgetter("", "a", "b")
+_SUFFIXES: list[str] = []
+
+
+def _control_suffixes(count: int) -> list[str]:
+    """'.controls[0]' ... '.controls[count - 1]' (made once, shared by every surface)."""
+    if len(_SUFFIXES) < count:
+        _SUFFIXES.extend(f".controls[{i}]" for i in range(len(_SUFFIXES), count))
+    return _SUFFIXES[:count]
 _CIRCLE_KEYS_LINE = _CIRCLE_KEYS | {""}
 _POINT_PAIR_KEYS_LINE = _POINT_PAIR_KEYS | {""}
 
 
-def _instances(cls: type, keys: tuple[str, ...], rows) -> list:
-    """Frozen dataclass instances of ``cls`` from rows of field values in ``keys`` order, as
-    ``_frozen`` builds them, by maps over builtins (no Python-level loop)."""
-    rows = list(rows)
-    instances = list(map(_new, repeat(cls, len(rows))))
-    fields = map(dict, map(zip, repeat(keys), rows))
+def _with_fields(cls: type, fields: list[dict]) -> list:
+    """Frozen dataclass instances of ``cls``, one per dict of field values, as ``_frozen``
+    builds them, by maps over builtins (no Python-level loop)."""
+    instances = list(map(_new, repeat(cls, len(fields))))
     deque(map(_set, instances, repeat("__dict__"), fields), maxlen=0)
     return instances
 
@@ -541,27 +582,35 @@ def _count_keys(value: object) -> int:
     return 0
 
 
-def _numbers(values: list, shape: tuple[int, ...]) -> np.ndarray:
-    """``values`` as a float64 array of ``shape``, all finite; ints read as the careful
-    reader reads them (float(int)), anything else (bool, text, None, a huge int) refused."""
+def _floats(values: list) -> tuple[np.ndarray, list[float]]:
+    """(array, list) of ``values``, plain finite numbers as the careful reader's ``number``
+    reads them (an int as float(int)); anything else (bool, text, None, a list, a huge int)
+    refused. Types are checked by C-level maps over the list: the array only sees floats."""
+    kinds = set(map(type, values))
+    if not kinds <= {float}:
+        _check(kinds <= {float, int})
+        try:
+            values = list(map(float, values))
+        except OverflowError:
+            raise _OutsideSubset("a huge integer") from None
+    array = np.array(values, dtype=np.float64)
+    _check(bool(np.isfinite(array).all()))
+    return array, values
+
+
+def _vectors(values: list) -> tuple[np.ndarray, list[tuple[float, float, float]]]:
+    """(n x 3 array, tuples) of ``values``, lists of three numbers each (as ``_floats``)."""
     if not values:
-        return np.zeros(shape)
-    try:
-        array = np.array(values)
-    except (ValueError, TypeError):
-        raise _OutsideSubset("ragged") from None
-    # The subset's flow collections hold only numbers, so a list of numbers is int64 or float64;
-    # anything else (None for a missing key, a nested list, a huge int) is object or another shape.
-    _check(array.shape == shape and array.dtype.kind in "if")
-    array = array.astype(np.float64)
-    _check(bool(np.all(np.isfinite(array))))
-    return array
+        return np.zeros((0, 3)), []
+    _check(set(map(type, values)) == {list} and set(map(len, values)) == {3})
+    array, flat = _floats(list(chain.from_iterable(values)))
+    triples = iter(flat)
+    return array.reshape(-1, 3), list(zip(triples, triples, triples))
 
 
-def _lengths(values: list, shape: tuple[int, ...]) -> np.ndarray:
-    array = _numbers(values, shape)
-    _check(bool(np.all(np.abs(array) <= careful.MAX_LENGTH)))
-    return array
+def _within_limit(array: np.ndarray) -> bool:
+    """Every coordinate within the careful reader's MAX_LENGTH."""
+    return array.size == 0 or float(np.abs(array).max()) <= careful.MAX_LENGTH
 
 
 def _maybe_coincident(a: np.ndarray, b: np.ndarray) -> np.ndarray:
