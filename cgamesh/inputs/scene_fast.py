@@ -30,7 +30,7 @@ import gc
 import json
 import re
 from collections import deque
-from itertools import chain, repeat
+from itertools import chain, compress, repeat
 from operator import itemgetter
 
 import numpy as np
@@ -114,12 +114,15 @@ def _plain_document(text: str) -> tuple[dict, int] | None:
         return None
     try:
         document = "".join(_json_pieces(_LINE.findall(text))).replace(": ", '": ')
-        # Every key ends in '":' (a block key as written here, a flow key once its ': ' is
-        # quoted); the line markers are '"":'.
-        keys = document.count('":') - document.count('"":')
+        # In the subset every ':' ends a key (a ':' in a plain scalar was refused, comments
+        # are gone, and any other place of ': ' makes the line or the JSON invalid).
+        keys = text.count(":")
         return json.loads(document, parse_constant=_no_constant), keys
     except (_OutsideSubset, ValueError, RecursionError):
         return None
+
+
+_PRINTABLE = bytes(range(0x20, 0x7F)) + b"\n"
 
 
 def _keys_quoted(text: str) -> str | None:
@@ -128,7 +131,7 @@ def _keys_quoted(text: str) -> str | None:
     # Printable ASCII and line feeds only: no tab (YAML's indentation rules for it are
     # subtle), no carriage return, no byte PyYAML refuses, no Unicode line break (NEL, U+2028)
     # that would shift line numbers; no quote, as the keys are quoted here.
-    if not (text.isascii() and text.replace("\n", "").isprintable()) or '"' in text:
+    if not text.isascii() or text.encode("ascii").translate(None, _PRINTABLE) or '"' in text:
         return None
     if "#" in text:
         text = _COMMENT.sub("", text)
@@ -325,7 +328,9 @@ def _scene(document: dict, keys: int, path: str, rendering: bool) -> Scene:
     _check(type(items) is list and len(items) > 0)
     names: set[str] = set()
     controls = _Controls(path)
-    parts = [_surface(item, i, names, controls, path) for i, item in enumerate(items)]
+    parts = _plain_surfaces(items, controls, path)
+    if parts is None:
+        parts = [_surface(item, i, names, controls, path) for i, item in enumerate(items)]
     built = tuple(controls.build())
     _check(seen + controls.keys_seen == keys)  # else a key was repeated
     surfaces = []
@@ -333,6 +338,96 @@ def _scene(document: dict, keys: int, path: str, rendering: bool) -> Scene:
         fields["controls"] = built[first:last]
         surfaces.append(_frozen(SurfaceSpec, fields))
     return Scene(path, version, units, careful.METERS_PER_UNIT[units], up, tuple(surfaces))
+
+
+_MISSING = object()  # a key not written (None is a key written with a null value)
+_PLAIN_SURFACE_KEYS = frozenset(("", "name", "type", "curve", "controls", "resolution",
+                                 "tolerance", "closed", "caps", "material"))
+_SURFACE_TYPES, _CURVES = frozenset(careful.SURFACE_TYPES), frozenset(careful.CURVES)
+_CLOSABLE_CURVES = frozenset(careful.CLOSABLE_CURVES)
+
+
+def _plain_surfaces(items: list, controls: _Controls,
+                    path: str) -> list[tuple[dict, int, int]] | None:
+    """What ``_surface`` returns for every item, checked key by key over all surfaces at once
+    (C-level maps and set tests instead of some twenty checks a surface); None, with nothing
+    added to ``controls``, unless every item is a mapping of the keys that converters write
+    (``_PLAIN_SURFACE_KEYS``; the others keep their defaults)."""
+    if set(map(type, items)) != {dict} or not all(map(_PLAIN_SURFACE_KEYS.issuperset, items)):
+        return None
+    count = len(items)
+
+    def column(key: str) -> list:
+        return list(map(dict.get, items, repeat(key), repeat(_MISSING)))
+
+    lines, names, kinds, curves = column(""), column("name"), column("type"), column("curve")
+    _check(_MISSING not in lines)
+    _check(set(map(type, names)) == {str} and all(map(_NAME.fullmatch, names))
+           and len(set(names)) == count)
+    _check(set(map(type, kinds)) == {str} and _SURFACE_TYPES.issuperset(kinds))
+    _check(set(map(type, curves)) == {str} and _CURVES.issuperset(curves))
+    closed, caps = _flags(column("closed")), _flags(column("caps"))
+    _check(_CLOSABLE_CURVES.issuperset(compress(curves, closed)))
+    _check({"circles"}.issuperset(compress(kinds, caps)) and not any(compress(closed, caps)))
+    controls.keys_seen += sum(map(len, items)) - count  # the line markers are no keys
+    key_paths = [f"surfaces[{i}]" for i in range(count)]
+    ranges = []
+    for entries, kind, curve, closing, key_path in zip(items, kinds, curves, closed, key_paths):
+        first = len(controls.forms)
+        controls.add(entries.get("controls"), kind, curve, closing, key_path)
+        ranges.append((first, len(controls.forms)))
+    arounds, alongs, tolerances = _plain_resolutions(column("resolution"), column("tolerance"),
+                                                     kinds, controls)
+    materials = [_DEFAULT_MATERIAL if entries is _MISSING else _material(entries, controls)
+                 for entries in column("material")]
+    locations = _with_fields(Location, [{"file": path, "line": line, "key_path": key_path}
+                                        for line, key_path in zip(lines, key_paths)])
+    return [({"name": name, "type": kind, "curve": curve, "tension": 0.0, "bias": 0.0,
+              "continuity": 0.0, "closed": closing, "align": True, "controls": None,
+              "around": around, "along": along, "tolerance": tolerance, "caps": capped,
+              "material": material, "location": location, "uv": "natural", "uv_scale": None,
+              "interpolation": "blade"}, first, last)
+            for name, kind, curve, closing, capped, around, along, tolerance, material,
+            location, (first, last)
+            in zip(names, kinds, curves, closed, caps, arounds, alongs, tolerances, materials,
+                   locations, ranges)]
+
+
+def _flags(values: list, default: bool = False) -> list[bool]:
+    """Booleans of a column, ``default`` where the key was not written."""
+    _check({bool, type(_MISSING)}.issuperset(map(type, values)))
+    if _MISSING in values:
+        return [default if value is _MISSING else value for value in values]
+    return values
+
+
+def _plain_resolutions(resolutions: list, tolerances: list, kinds: list,
+                       seen: _Controls) -> tuple[list, list, list]:
+    """(around, along, tolerance) columns as ``_resolution`` reads them, surface by surface."""
+    given = [entries for entries in resolutions if entries is not _MISSING]
+    _check(set(map(type, given)) <= {dict} and all(map(_RESOLUTION_KEYS.issuperset, given)))
+    seen.keys_seen += sum(map(len, given))
+    arounds = [careful.DEFAULT_AROUND if entries is _MISSING
+               else entries.get("around", careful.DEFAULT_AROUND) for entries in resolutions]
+    alongs = [careful.DEFAULT_ALONG if entries is _MISSING
+              else entries.get("along", careful.DEFAULT_ALONG) for entries in resolutions]
+    _check(set(map(type, arounds)) == {int} and set(map(type, alongs)) == {int})
+    _check(min(alongs) >= 2 and max(alongs) <= careful.MAX_RESOLUTION
+           and min(arounds) >= 2 and max(arounds) <= careful.MAX_RESOLUTION)
+    _check(min(compress(arounds, map("circles".__eq__, kinds)), default=3) >= 3)
+    if all(value is _MISSING for value in tolerances):
+        return arounds, alongs, [None] * len(tolerances)
+    values = []
+    for i, value in enumerate(tolerances):
+        if value is _MISSING:
+            values.append(None)
+            continue
+        _check(resolutions[i] is _MISSING)
+        value = _number(value)
+        _check(value > 0.0)
+        values.append(value)
+        arounds[i] = alongs[i] = None
+    return arounds, alongs, values
 
 
 def _surface(entries: object, index: int, names: set[str], controls: _Controls,
