@@ -61,11 +61,21 @@ _FLOW = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*+\]|\{{(?:{_FLOW_ATOM}|{_NESTED_LIST}
 # list): matched with its key as one piece, so that its lines cost no Python work each. The
 # items are numerals by this loose class; json.loads then enforces the exact grammar (which
 # is _NUMBER's), so anything else makes the JSON invalid and the file falls back.
-_RUN = r"\n( *)- [-+.0-9eE]++ *+(?:\n\8- [-+.0-9eE]++ *+)*+"
+_NUMERAL = r"[-+.0-9eE]++"
+_RUN = rf"\n(?P<run_indent> *)- {_NUMERAL} *+(?:\n(?P=run_indent)- {_NUMERAL} *+)*+"
+# A list item that is a block mapping of numbers and flow lists (a control as PyYAML writes
+# it), matched whole: '- key: value' then its other keys two columns in, each with a value
+# on its line or a block list of numbers at the key's column (PyYAML's indentless layout).
+# The next line that is not blank must not be deeper than the dash, or the mapping goes on
+# in a shape this piece does not take (the lines are then read one by one).
+_ITEM_VALUE = rf"(?::(?: +(?:{_FLOW}|{_NUMERAL}) *+|(?:\n(?P=item_indent)  - {_NUMERAL} *+)++))"
+_ITEM = (rf"(?P<item_indent> *)- (?P<item>{_IDENTIFIER}{_ITEM_VALUE}"
+         rf"(?:\n(?P=item_indent)  {_IDENTIFIER}{_ITEM_VALUE})*+)"
+         rf"(?!(?:\n *+$)*+\n(?P=item_indent) )")
 # indent, the dashes ('- ', or '- - ' for a list in a list), key, then a flow value, a number,
 # a name, a run (only after a key with nothing after it), or anything else (outside the subset).
-_LINE = re.compile(rf'^( *)((?:- +)+)?(?:({_IDENTIFIER}):(?: +|$))?'
-                   rf'(?:({_FLOW})|({_NUMBER})|({_IDENTIFIER})|(?(3)({_RUN})|(?!))|([^\n]+))? *$',
+_LINE = re.compile(rf'^(?:{_ITEM}|( *)((?:- +)+)?(?:(?P<key>{_IDENTIFIER}):(?: +|$))?'
+                   rf'(?:({_FLOW})|({_NUMBER})|({_IDENTIFIER})|(?(key)({_RUN})|(?!))|([^\n]+))? *)$',
                    re.M)
 # YAML 1.2 core-schema words (the careful reader's resolution) as JSON literals.
 _WORDS = {word: literal for literal, words in (("true", ("true", "True", "TRUE")),
@@ -161,9 +171,14 @@ def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
     outer: list[tuple[bool, int, bool]] = []
     mapping, column_open, items = True, -1, False  # column -1: the document is not open yet
     pending = -1
-    number = 0
-    for indent, dash, key, flow, numeral, name, run, run_indent, other in lines:
-        number += 1
+    number = later = 0
+    for item_indent, item, indent, dash, key, flow, numeral, name, run, run_indent, other in lines:
+        number += 1 + later  # later: the lines of the last piece after its first
+        later = 0
+        if item:
+            # A whole block mapping as a list item: as a flow mapping on the dash's line.
+            indent, dash, flow = item_indent, "- ", _item_mapping(item, item_indent)
+            later = item.count("\n")
         if key and items and mapping and not dash and pending < 0 and len(indent) == column_open:
             # The most common line, a key of the open mapping after its first: what the
             # general steps below do for it, without the tests that cannot apply.
@@ -175,7 +190,7 @@ def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
                 if len(run_indent) < column_open:
                     raise _OutsideSubset(number)
                 append(f',"{key}":[{run.replace(run[:len(run_indent) + 3], ",")[1:]}]')
-                number += run.count("\n")
+                later = run.count("\n")
             elif other:
                 raise _OutsideSubset(number)
             else:
@@ -250,7 +265,7 @@ def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
             if len(run_indent) < column_open:
                 raise _OutsideSubset(number)
             append(f'[{run.replace(run[:len(run_indent) + 3], ",")[1:]}]')
-            number += run.count("\n")
+            later = run.count("\n")
         else:
             pending = column_open
     if column_open < 0:
@@ -263,6 +278,18 @@ def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
 
 
 _DASHES = re.compile(r"- +")
+
+
+def _item_mapping(item: str, indent: str) -> str:
+    """The flow mapping (keys' quotes opened, as ``_keys_quoted`` leaves them) of a list
+    item's block mapping as ``_ITEM`` matched it, ``indent`` the dash's."""
+    keys = "\n" + indent + "  "
+    if ":\n" not in item:
+        return '{"' + item.replace(keys, ', "') + "}"
+    # Block lists of numbers: their items become ',x' after the key's ':'.
+    pieces = item.replace(keys + "- ", ",").split(keys)
+    return '{"' + ', "'.join([piece.replace(":,", '":[', 1) + "]" if ":," in piece else piece
+                             for piece in pieces]) + "}"
 
 
 # --- checks over the plain data ----------------------------------------------------------------
