@@ -28,9 +28,10 @@ from __future__ import annotations
 
 import gc
 import json
+import math
 import re
 from collections import deque
-from itertools import chain, compress, repeat
+from itertools import accumulate, chain, compress, repeat
 from operator import itemgetter
 
 import numpy as np
@@ -416,11 +417,18 @@ def _plain_surfaces(items: list, controls: _Controls,
     _check({"circles"}.issuperset(compress(kinds, caps)) and not any(compress(closed, caps)))
     controls.keys_seen += sum(map(len, items)) - count  # the line markers are no keys
     key_paths = [f"surfaces[{i}]" for i in range(count)]
-    ranges = []
-    for entries, kind, curve, closing, key_path in zip(items, kinds, curves, closed, key_paths):
-        first = len(controls.forms)
-        controls.add(entries.get("controls"), kind, curve, closing, key_path)
-        ranges.append((first, len(controls.forms)))
+    lists = column("controls")
+    _check(set(map(type, lists)) == {list}
+           and min(map(int.__sub__, map(len, lists), map(int.__add__, repeat(2), closed))) >= 0)
+    ranges = None
+    if len(set(kinds)) == 1:  # one kind throughout: every control at once, if all are plain
+        ranges = controls.add_plain_lists(lists, kinds[0] == "circles", key_paths)
+    if ranges is None:
+        ranges = []
+        for controls_list, kind, curve, closing, key_path in zip(lists, kinds, curves, closed, key_paths):
+            first = len(controls.forms)
+            controls.add(controls_list, kind, curve, closing, key_path)
+            ranges.append((first, len(controls.forms)))
     arounds, alongs, tolerances = _plain_resolutions(column("resolution"), column("tolerance"),
                                                      kinds, controls)
     materials = [_DEFAULT_MATERIAL if entries is _MISSING else _material(entries, controls)
@@ -620,9 +628,24 @@ class _Controls:
             largest = max(weights)
             _check(all(weight * careful.MAX_WEIGHT_RATIO >= largest for weight in weights))
 
-    def _add_plain(self, items: list, circles: bool, key_path: str) -> bool:
+    def add_plain_lists(self, lists: list[list], circles: bool,
+                        key_paths: list[str]) -> list[tuple[int, int]] | None:
+        """Add the controls of every list (of surfaces ``key_paths``, all of one kind) if
+        every one is of the plain shape (see ``_add_plain``), by maps over all of them at
+        once; the range of each list's controls, or None with nothing added."""
+        counts = list(map(len, lists))
+        paths = map(str.__add__, chain.from_iterable(map(repeat, key_paths, counts)),
+                    chain.from_iterable(map(_control_suffixes, counts)))
+        first = len(self.forms)
+        if not self._add_plain(list(chain.from_iterable(lists)), circles, paths):
+            return None
+        ends = list(accumulate(counts, initial=first))
+        return list(zip(ends, ends[1:]))
+
+    def _add_plain(self, items: list, circles: bool, key_path) -> bool:
         """Add ``items`` if every one is a mapping of exactly the plain keys (center, normal
-        and radius; a and b), by C-level maps over the list; False (nothing added) if not."""
+        and radius; a and b), by C-level maps over the list; False (nothing added) if not.
+        ``key_path``: the list's (str), or an iterable of each item's."""
         row, width = (_CIRCLE_ROW, 4) if circles else (_PAIR_ROW, 3)
         try:
             rows = list(map(row, items))
@@ -641,24 +664,24 @@ class _Controls:
             self.ends_a += columns[1]
             self.ends_b += columns[2]
         self.keys_seen += (width - 1) * count
-        self.key_paths += map(key_path.__add__, _control_suffixes(count))
+        if type(key_path) is str:
+            self.key_paths += map(key_path.__add__, _control_suffixes(count))
+        else:
+            self.key_paths += key_path  # one for each item, made by the caller
         self.weights += repeat(1.0, count)
         self.forms += repeat(_CIRCLE if circles else _PAIR, count)
         return True
 
     def build(self) -> list[CircleControl | PointPairControl]:
         """The specs, in file order, once every number has passed."""
-        centers_array, centers = _vectors(self.centers)
-        normals_array, normals = _vectors(self.normals)
-        radii_array, radii = _floats(self.radii)
-        ends_a_array, ends_a = _vectors(self.ends_a)
-        ends_b_array, ends_b = _vectors(self.ends_b)
-        _check(_within_limit(centers_array) and _within_limit(radii_array)
-               and _within_limit(ends_a_array) and _within_limit(ends_b_array))
-        _check(bool(np.all(np.any(normals_array != 0.0, axis=1))))
-        _check(bool(np.all(radii_array > 0.0)))
-        for i in np.flatnonzero(_maybe_coincident(ends_a_array, ends_b_array)).tolist():
-            _check(not careful._coincident(ends_a[i], ends_b[i]))
+        limit = careful.MAX_LENGTH
+        centers, normals = _vectors(self.centers, limit), _vectors(self.normals)
+        radii = _floats(self.radii, limit)
+        ends_a, ends_b = _vectors(self.ends_a, limit), _vectors(self.ends_b, limit)
+        _check((0.0, 0.0, 0.0) not in normals and (not radii or min(radii) > 0.0))
+        if ends_a:
+            for i in np.flatnonzero(_maybe_coincident(np.array(ends_a), np.array(ends_b))).tolist():
+                _check(not careful._coincident(ends_a[i], ends_b[i]))
         path = self.path
         locations = _with_fields(Location, [{"file": path, "line": line, "key_path": key_path}
                                             for line, key_path in zip(self.lines, self.key_paths)])
@@ -722,10 +745,10 @@ def _count_keys(value: object) -> int:
     return 0
 
 
-def _floats(values: list) -> tuple[np.ndarray, list[float]]:
-    """(array, list) of ``values``, plain finite numbers as the careful reader's ``number``
-    reads them (an int as float(int)); anything else (bool, text, None, a list, a huge int)
-    refused. Types are checked by C-level maps over the list: the array only sees floats."""
+def _floats(values: list, limit: float = math.inf) -> list[float]:
+    """``values`` as the careful reader's ``number`` reads them (an int as float(int)), all
+    finite and at most ``limit`` in size; anything else (bool, text, None, a list, a huge
+    int) refused. By C-level maps and reductions over the whole list."""
     kinds = set(map(type, values))
     if not kinds <= {float}:
         _check(kinds <= {float, int})
@@ -733,24 +756,20 @@ def _floats(values: list) -> tuple[np.ndarray, list[float]]:
             values = list(map(float, values))
         except OverflowError:
             raise _OutsideSubset("a huge integer") from None
-    array = np.array(values, dtype=np.float64)
-    _check(bool(np.isfinite(array).all()))
-    return array, values
+    # A NaN or an infinity makes the sum so; a sum that overflows only sends the file to
+    # the careful reader.
+    _check(not values or (math.isfinite(sum(values))
+                          and -limit <= min(values) and max(values) <= limit))
+    return values
 
 
-def _vectors(values: list) -> tuple[np.ndarray, list[tuple[float, float, float]]]:
-    """(n x 3 array, tuples) of ``values``, lists of three numbers each (as ``_floats``)."""
+def _vectors(values: list, limit: float = math.inf) -> list[tuple[float, float, float]]:
+    """``values``, lists of three numbers each (as ``_floats``), as tuples."""
     if not values:
-        return np.zeros((0, 3)), []
+        return []
     _check(set(map(type, values)) == {list} and set(map(len, values)) == {3})
-    array, flat = _floats(list(chain.from_iterable(values)))
-    triples = iter(flat)
-    return array.reshape(-1, 3), list(zip(triples, triples, triples))
-
-
-def _within_limit(array: np.ndarray) -> bool:
-    """Every coordinate within the careful reader's MAX_LENGTH."""
-    return array.size == 0 or float(np.abs(array).max()) <= careful.MAX_LENGTH
+    triples = iter(_floats(list(chain.from_iterable(values)), limit))
+    return list(zip(triples, triples, triples))
 
 
 def _maybe_coincident(a: np.ndarray, b: np.ndarray) -> np.ndarray:
