@@ -344,9 +344,9 @@ def _text(lines) -> str:
 @settings(max_examples=600)
 @given(st.lists(line, min_size=1, max_size=12))
 def test_the_subset_parser_reads_what_pyyaml_reads_or_steps_aside(lines):
-    from cgamesh.inputs.scene_fast import _plain_document
+    from cgamesh.inputs.scene_subset import plain_document
 
     text = _text([("", "", "a", "", "")] + lines)  # a mapping at the top, like a scene
-    fast = _plain_document(text)  # (document, keys written): a repeated key shows in the count
+    fast = plain_document(text)  # (document, keys written): a repeated key shows in the count
     if fast is not None:
         assert repr(fast) == repr(_careful_plain(text)), text
