@@ -375,7 +375,8 @@ def test_the_reader_benchmark_runs_at_a_small_size_and_both_readers_agree():
     result = subprocess.run([sys.executable, str(script), "--surfaces", "20", "--repeats", "1"],
                             capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr
-    assert result.stdout.count("  fast path ") == 2 and "DIFFER" not in result.stderr
+    assert result.stdout.count("  fast path ") == 3 and "DIFFER" not in result.stderr
+    assert result.stdout.count("  target >= 20 MB/s CPU, whole read: ") == 3
 
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.stem)

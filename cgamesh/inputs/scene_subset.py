@@ -55,12 +55,12 @@ _RUN = rf"\n(?P<run_indent> *)- {_NUMERAL} *+(?:\n(?P=run_indent)- {_NUMERAL} *+
 # The next line that is not blank must not be deeper than the dash, or the mapping goes on
 # in a shape this piece does not take (the lines are then read one by one).
 _ITEM_VALUE = rf"(?::(?: +(?:{_FLOW}|{_NUMERAL}) *+|(?:\n(?P=item_indent)  - {_NUMERAL} *+)++))"
-_ITEM = (rf"(?P<item_indent> *)- (?P<item>{_IDENTIFIER}{_ITEM_VALUE}"
+_ITEM = (rf"(?P<item_indent> *+)- (?P<item>{_IDENTIFIER}{_ITEM_VALUE}"
          rf"(?:\n(?P=item_indent)  {_IDENTIFIER}{_ITEM_VALUE})*+)"
          rf"(?!(?:\n *+$)*+\n(?P=item_indent) )")
 # indent, the dashes ('- ', or '- - ' for a list in a list), key, then a flow value, a number,
 # a name, a run (only after a key with nothing after it), or anything else (outside the subset).
-_LINE = re.compile(rf'^(?:{_ITEM}|( *)((?:- +)+)?(?:(?P<key>{_IDENTIFIER}):(?: +|$))?'
+_LINE = re.compile(rf'^(?:{_ITEM}|( *+)((?:- +)+)?(?:(?P<key>{_IDENTIFIER}):(?: +|$))?'
                    rf'(?:({_FLOW})|({_NUMBER})|({_IDENTIFIER})|(?(key)({_RUN})|(?!))|([^\n]+))? *)$',
                    re.M)
 # YAML 1.2 core-schema words (the careful reader's resolution) as JSON literals.
@@ -141,6 +141,11 @@ def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
             # A whole block mapping as a list item: as a flow mapping on the dash's line.
             indent, dash, flow = item_indent, "- ", _item_mapping(item, item_indent)
             later = item.count("\n")
+        if (flow and dash == "- " and not (key or mapping) and items and pending < 0
+                and len(indent) == column_open):
+            # The next item of the open list, a flow collection (a control): likewise.
+            append(f',{{"":{number},{flow[1:]}' if flow[0] == "{" else "," + flow)
+            continue
         if key and items and mapping and not dash and pending < 0 and len(indent) == column_open:
             # The most common line, a key of the open mapping after its first: what the
             # general steps below do for it, without the tests that cannot apply.
