@@ -368,6 +368,66 @@ def test_the_layouts_are_what_they_claim():
             if text_line.lstrip().startswith("- ") and ("through" in text_line or "center" in text_line)]
 
 
+def _both_json_readers(text: str) -> list[str]:
+    """The fast path's result with orjson's JSON reader and with the standard library's, as
+    repr (every float's bits; None when it steps aside)."""
+    import cgamesh.inputs.scene_subset as subset
+
+    results = []
+    for prefer_orjson in (True, False):
+        reader = subset.json_reader(prefer_orjson)
+        previous, subset._read_json = subset._read_json, reader
+        try:
+            results.append(repr(read_fast(text, "scene.yaml", False)))
+        finally:
+            subset._read_json = previous
+    return results
+
+
+def test_orjson_is_the_fast_paths_json_reader():
+    import orjson
+
+    import cgamesh.inputs.scene_subset as subset
+
+    assert subset.json_reader() is orjson.loads and subset._read_json is orjson.loads
+
+
+@pytest.mark.parametrize("case", ["examples", "mutated", "layouts"])
+def test_orjson_and_json_read_every_text_alike(case):
+    """The same scene to the last bit of every float, or both step aside: on the examples in
+    three layouts, the mutated examples, and generated scenes in each layout. (The plain
+    data may differ where no scene can: orjson reads an integer past 64 bits as a float.)"""
+    import yaml
+
+    if case == "examples":
+        texts = []
+        for path in EXAMPLES:
+            text = path.read_text(encoding="utf-8")
+            tree = yaml.safe_load(text)
+            texts += [text] + [yaml.safe_dump(tree, sort_keys=False, default_flow_style=flow)
+                               for flow in (False, None)]
+    elif case == "mutated":
+        texts = list(_fuzz_cases(count=150, seed=29))
+    else:
+        texts = [layout(scene_document) for scene_document in _documents(20)
+                 for layout in LAYOUTS.values()]
+    for text in texts:
+        with_orjson, with_json = _both_json_readers(text)
+        assert with_orjson == with_json, text
+    assert sum(_both_json_readers(text)[0] != "None" for text in texts) > len(texts) // 5  # read
+
+
+def _documents(count: int) -> list[dict]:
+    """``count`` scene documents drawn from ``scene_documents`` (hypothesis' example())."""
+    import warnings
+
+    from hypothesis.errors import NonInteractiveExampleWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NonInteractiveExampleWarning)
+        return [scene_documents().example() for _ in range(count)]
+
+
 def test_the_reader_benchmark_runs_at_a_small_size_and_both_readers_agree():
     import subprocess
     import sys
