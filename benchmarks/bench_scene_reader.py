@@ -13,7 +13,8 @@ pure-Python node tree with every line), and prints MB/s of that whole read, in C
 this process and in wall time (the two differ on a machine shared with other work), with
 the careful reader's as the baseline of the same run. For reference, libyaml's C loader
 (``yaml.load`` with ``CSafeLoader``: plain data only, no lines, no checks, no specs), when
-PyYAML has it. Each figure is the shortest of ``repeats`` runs. Checks that both readers
+PyYAML has it. The fast path's JSON reader is orjson's when installed (the ``fastread``
+extra), else json's; the first line says which. Each figure is the shortest of ``repeats`` runs. Checks that both readers
 return the same scene; never asserts a time. Target: at least 20 MB/s (CPU) for the whole
 read in every layout; a line per layout says whether it is met.
 """
@@ -96,8 +97,12 @@ def main(argv=None) -> int:
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args(argv)
     document = scene_document(args.surfaces, args.controls)
+    from cgamesh.inputs.scene_subset import json_reader
+
+    reader = "orjson" if getattr(json_reader(), "__module__", "") == "orjson" else "json"
     print(f"{args.surfaces} surfaces of {args.controls} controls; PyYAML {yaml.__version__}, "
           f"libyaml C loader {'available' if yaml.__with_libyaml__ else 'NOT available'}; "
+          f"JSON reader of the fast path: {reader}; "
           f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     print("MB/s of the whole read, file -> validated scene (load_scene), best of runs")
     layouts = (("flow controls", flow_style(document)),
