@@ -154,13 +154,19 @@ def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
     mapping, column_open, items = True, -1, False  # column -1: the document is not open yet
     pending = -1
     number = later = 0
+    pads: dict[str, str] = {}  # '\n' and the column of a block item's keys, by the dash's indent
     for item_indent, item, indent, dash, key, flow, numeral, name, run, run_indent, other in lines:
         number += 1 + later  # later: the lines of the last piece after its first
         later = 0
         if item:
             # A whole block mapping as a list item: as a flow mapping on the dash's line.
-            indent, dash, flow = item_indent, "- ", _item_mapping(item, item_indent)
             later = item.count("\n")
+            if ":\n" in item:
+                flow = _item_mapping(item, item_indent)
+            else:  # values on their lines only (PyYAML's mixed layout): the common case inline
+                keys = pads.get(item_indent) or pads.setdefault(item_indent, "\n" + item_indent + "  ")
+                flow = '{"' + item.replace(keys, ', "') + "}"
+            indent, dash = item_indent, "- "
         if (flow and dash == "- " and not (key or mapping) and items and pending < 0
                 and len(indent) == column_open):
             # The next item of the open list, a flow collection (a control): likewise.
