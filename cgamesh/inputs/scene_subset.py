@@ -78,10 +78,11 @@ def _no_constant(name: str):
 
 def json_reader(prefer_orjson: bool = True):
     """The JSON reader of the fast path: orjson's (the ``fastread`` extra: it builds the data
-    in a third of json's time) when installed, else the standard library's. Both refuse NaN
-    and infinities and read every number of the subset to the same value (the tests read
-    every text with both); orjson also refuses integers past 64 bits, which only sends such
-    a file to the careful reader."""
+    in about a third of json's time) when installed, else the standard library's. Both refuse
+    NaN and infinities and read every number of the subset to the same value, so the fast
+    path gives the same scene with either (the tests read every text with both). They differ
+    only on an integer past 64 bits, a float to orjson and an int to json: where a number is
+    due the checks read both as float(int), where an integer is due both are refused."""
     if prefer_orjson:
         try:
             from orjson import loads
@@ -127,7 +128,7 @@ def _keys_quoted(text: str) -> str | None:
     if "#" in text:
         text = _COMMENT.sub("", text)
     # Open the quotes of the keys of flow mappings: a '"' before the first key and before the
-    # keys after ', '; each flow value's ': ' closes them (``_json_pieces``). In the subset
+    # keys after ', '; their ': ' closes them (``plain_document``, in one pass). In the subset
     # ':' appears only after keys (PyYAML reads a ':' followed by anything else as part of a
     # plain scalar), so a stray quote only makes the JSON invalid.
     if not text.endswith("\n"):
@@ -140,9 +141,9 @@ def _keys_quoted(text: str) -> str | None:
 def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
     """JSON text of the block structure; each piece is (item indent, item, indent, dashes,
     key, flow, number, name, run, run indent, other) as ``_LINE`` splits it (a line, a key
-    with its block list of numbers, or a whole block-mapping list item). Raises OutsideSubset for anything the
-    subset leaves out. The keys of flow mappings are left as ``"key: `` (the caller closes
-    their quotes in one pass over the whole text).
+    with its block list of numbers, or a whole block-mapping list item). Raises OutsideSubset
+    for anything the subset leaves out. The keys of flow mappings are left as ``"key: `` (the
+    caller closes their quotes in one pass over the whole text).
 
     The innermost open block collection is (``mapping``, ``column``, ``items``): a mapping's
     column is that of its keys, a list's that of its dashes, ``items`` whether it has one yet
@@ -164,7 +165,8 @@ def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
             if ":\n" in item:
                 flow = _item_mapping(item, item_indent)
             else:  # values on their lines only (PyYAML's mixed layout): the common case inline
-                keys = pads.get(item_indent) or pads.setdefault(item_indent, "\n" + item_indent + "  ")
+                keys = pads.get(item_indent) or pads.setdefault(item_indent,
+                                                                "\n" + item_indent + "  ")
                 flow = '{"' + item.replace(keys, ', "') + "}"
             indent, dash = item_indent, "- "
         if (flow and dash == "- " and not (key or mapping) and items and pending < 0
@@ -237,8 +239,7 @@ def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
                 elif name and name not in _WORDS:
                     append(f'"{name}"')
                 else:
-                    # '-' alone, or a boolean or null as a list item: never valid in a scene,
-                    # and numpy would read true as 1.0 in a list of numbers.
+                    # '-' alone, or a boolean or null as a list item: never valid in a scene.
                     raise OutsideSubset(number)
                 continue
             outer.append((mapping, column_open, True))
