@@ -10,12 +10,13 @@ None``: flow lists under block mappings). Times the whole read, file to validate
 (``load_scene``, meshing's call: reading, parsing, checking every value and building every
 spec), with the fast path and with the careful reader alone (``fast=False``: PyYAML's
 pure-Python node tree with every line), and prints MB/s of that whole read, in CPU time of
-this process and in wall time (the two differ on a machine shared with other work), with
-the careful reader's as the baseline of the same run. For reference, libyaml's C loader
+the reading process and in wall time (the two differ on a machine shared with other work),
+with the careful reader's as the baseline of the same run. For reference, libyaml's C loader
 (``yaml.load`` with ``CSafeLoader``: plain data only, no lines, no checks, no specs), when
 PyYAML has it. The fast path is timed in a fresh process for each layout, as a command reads
-its scene (after other readings the heap is larger and the same read slower). The fast path's JSON reader is orjson's when installed (the ``fastread``
-extra), else json's; the first line says which. Each figure is the shortest of ``repeats`` runs. Checks that both readers
+its scene (after other readings the heap is larger and the same read slower). Its JSON
+reader is orjson's when installed (the ``fastread`` extra), else json's; the first line says
+which. Each figure is the shortest of ``repeats`` runs. Checks that both readers
 return the same scene; never asserts a time. Target: at least 20 MB/s (CPU) for the whole
 read in every layout; a line per layout says whether it is met.
 """

@@ -196,7 +196,8 @@ def _plain_surfaces(items: list, controls: _Controls,
         ranges = controls.add_plain_lists(lists, kinds[0] == "circles", key_paths)
     if ranges is None:
         ranges = []
-        for controls_list, kind, curve, closing, key_path in zip(lists, kinds, curves, closed, key_paths):
+        for controls_list, kind, curve, closing, key_path in zip(lists, kinds, curves, closed,
+                                                                 key_paths):
             first = len(controls.forms)
             controls.add(controls_list, kind, curve, closing, key_path)
             ranges.append((first, len(controls.forms)))
@@ -470,7 +471,8 @@ class _Controls:
                 {"a": a, "b": b, "weight": weight, "location": location}
                 for a, b, weight, location in zip(ends_a, ends_b, self.weights, locations)])
         built = []
-        circle, pair, through = iter(zip(centers, normals, radii)), iter(zip(ends_a, ends_b)), iter(self.throughs)
+        circle, pair = iter(zip(centers, normals, radii)), iter(zip(ends_a, ends_b))
+        through = iter(self.throughs)
         for form, weight, location in zip(forms, self.weights, locations):
             if form == _PAIR:
                 a, b = next(pair)
