@@ -6,11 +6,12 @@ well under 1 MB/s, with libyaml's C parser too (its nodes and marks are Python o
 lines are needed only when something is wrong, plus the line of each surface and control
 (their ``Location``). So reading is two passes:
 
-1. This module accepts a strict subset of YAML, the shape that scene files are written in
-   (block mappings and lists of identifier keys; plain numbers, names and booleans; one-line
-   flow lists and mappings of numbers), rewrites it line by line into JSON with the line of
-   every list item's mapping under the key "" and lets ``json.loads`` build it; then checks
-   every value, numbers as arrays over all controls of the file at once.
+1. ``cgamesh.inputs.scene_subset`` accepts a strict subset of YAML, the shape that scene
+   files are written in (by hand, by converters, by PyYAML's ``safe_dump`` in its block or
+   mixed layout), rewrites it into JSON with the line of every list item's mapping under
+   the key "" and lets ``json.loads`` build it; this module then checks every value, key by
+   key over all surfaces and over all controls of the file at once (C-level maps, set tests
+   and reductions over whole lists, not checks per value).
 2. Anything it cannot vouch for returns ``None`` (never an error): text outside the subset
    (quotes, anchors, aliases, tags, block scalars, tabs, multi-line flow, non-ASCII, ...), a
    duplicate key, or any value the careful reader would refuse. ``parse_scene`` then runs
@@ -27,10 +28,11 @@ and nothing expands.
 from __future__ import annotations
 
 import gc
-import json
+import math
 import re
 from collections import deque
-from itertools import repeat
+from itertools import accumulate, chain, compress, repeat
+from operator import itemgetter
 
 import numpy as np
 
@@ -38,36 +40,8 @@ from cgamesh.material import Material
 from cgamesh.inputs import scene as careful
 from cgamesh.inputs.scene import CircleControl, Location, PointPairControl, Scene, SurfaceSpec
 from cgamesh.inputs.scene_rendering import RENDERING_KEYS
-
-# A comment starts at '#' at the start of a line or after a space (in the subset no quoted
-# text can hold one).
-_COMMENT = re.compile(r"(?<![^ \n])#[^\n]*")
-# The keys of flow mappings after the first: ', ' then an identifier (a number in a list
-# starts with a digit or '-'). Every key ends in ': ' or ':' at the line end.
-_NEXT_KEY = re.compile(r", (?=[A-Za-z_])")
-_INNER_COLON = re.compile(r":(?![ \n])")
-
-_NUMBER = r"-?(?:0|[1-9][0-9]*)(?:\.[0-9]+)?(?:[eE][-+]?[0-9]+)?"
-_IDENTIFIER = r"[A-Za-z_][A-Za-z0-9_]*"
-# One-line flow collections, nested at most three deep (a mapping of lists of lists, as
-# `through` needs), holding only numbers and (quoted) keys: the whole value must be one
-# collection, so that '[1], [2]' is not read as two. Possessive: no backtracking.
-_FLOW_ATOM = r'(?:[-+0-9.eE, ]++|"[A-Za-z_][A-Za-z0-9_]*: )'
-_FLAT_LIST = rf"\[{_FLOW_ATOM}*+\]"
-_NESTED_LIST = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*+\]"
-_FLOW = rf"\[(?:{_FLOW_ATOM}|{_FLAT_LIST})*+\]|\{{(?:{_FLOW_ATOM}|{_NESTED_LIST})*+\}}"
-# indent, '- ', key, then a flow value, a number, a name, or anything else (outside the subset).
-_LINE = re.compile(rf'^( *)(- +)?(?:({_IDENTIFIER}):(?: +|$))?'
-                   rf'(?:({_FLOW})|({_NUMBER})|({_IDENTIFIER})|([^\n]+))? *$', re.M)
-# YAML 1.2 core-schema words (the careful reader's resolution) as JSON literals.
-_WORDS = {word: literal for literal, words in (("true", ("true", "True", "TRUE")),
-                                               ("false", ("false", "False", "FALSE")),
-                                               ("null", ("null", "Null", "NULL")))
-          for word in words}
-
-
-class _OutsideSubset(Exception):
-    """The text or a value is one the fast path does not vouch for."""
+from cgamesh.inputs.scene_subset import OutsideSubset as _OutsideSubset
+from cgamesh.inputs.scene_subset import plain_document as _plain_document
 
 
 def read_fast(text: str, path: str, rendering: bool) -> Scene | None:
@@ -88,133 +62,6 @@ def read_fast(text: str, path: str, rendering: bool) -> Scene | None:
     finally:
         if collecting:
             gc.enable()
-
-
-# --- the YAML subset, as JSON ------------------------------------------------------------------
-
-def _no_constant(name: str):
-    raise _OutsideSubset(name)  # NaN / Infinity: JSON's words, not YAML's
-
-
-def _plain_document(text: str) -> tuple[dict, int] | None:
-    """(the document as plain data, every mapping that is a list item holding its 1-based line
-    under the key "", the number of keys written in it); None outside the subset. A repeated
-    key leaves the mapping with fewer keys than were written: the checks count every key they
-    see and step aside on a difference (cheaper than a hook on every mapping)."""
-    text = _keys_quoted(text)
-    if text is None:
-        return None
-    try:
-        pieces = _json_pieces(_LINE.findall(text))
-        document = "".join(pieces)
-        # Every key ends in '":' (a block key as written here, a flow key once its ': ' is
-        # quoted); the line markers are '"":'.
-        keys = document.count('":') - document.count('"":')
-        return json.loads(document, parse_constant=_no_constant), keys
-    except (_OutsideSubset, ValueError, RecursionError):
-        return None
-
-
-def _keys_quoted(text: str) -> str | None:
-    """The text without comments, the quotes of its flow keys opened; None if it cannot be in
-    the subset."""
-    # Printable ASCII and line feeds only: no tab (YAML's indentation rules for it are
-    # subtle), no carriage return, no byte PyYAML refuses, no Unicode line break (NEL, U+2028)
-    # that would shift line numbers; no quote, as the keys are quoted here.
-    if not (text.isascii() and text.replace("\n", "").isprintable()) or '"' in text:
-        return None
-    if "#" in text:
-        text = _COMMENT.sub("", text)
-    # Open the quotes of the keys of flow mappings: a '"' before the first key and before the
-    # keys after ', '; each flow value's ': ' closes them (``_json_pieces``). In the subset
-    # ':' appears only after keys (PyYAML reads a ':' followed by anything else as part of a
-    # plain scalar), so a stray quote only makes the JSON invalid.
-    if not text.endswith("\n"):
-        text += "\n"
-    if _INNER_COLON.search(text):
-        return None  # a ':' inside a plain scalar
-    return _NEXT_KEY.sub(', "', text.replace("{", '{"'))
-
-
-def _json_pieces(lines: list[tuple[str, ...]]) -> list[str]:
-    """JSON text of the block structure; each line is (indent, dash, key, flow, number, name,
-    other) as ``_LINE`` splits it. Raises _OutsideSubset for anything the subset leaves out.
-
-    The innermost open block collection is (``mapping``, ``column``, ``items``): a mapping's
-    column is that of its keys, a list's that of its dashes, ``items`` whether it has one yet
-    (for the commas); ``outer`` holds the enclosing ones. ``pending`` is the column of a
-    mapping whose last key had no value on its line (a nested block follows, or null)."""
-    out: list[str] = []
-    append = out.append
-    outer: list[tuple[bool, int, bool]] = []
-    mapping, column_open, items = True, -1, False  # column -1: the document is not open yet
-    pending = -1
-    number = 0
-    for indent, dash, key, flow, numeral, name, other in lines:
-        number += 1
-        if other:
-            raise _OutsideSubset(number)
-        if not (dash or key):
-            if flow or numeral or name:
-                raise _OutsideSubset(number)  # a value alone on its line: a continuation
-            continue  # blank or comment
-        column = len(indent)
-        if pending >= 0:
-            if column > pending or (dash and column == pending):
-                outer.append((mapping, column_open, True))
-                mapping, column_open, items = not dash, column, False
-                append("[" if dash else "{")
-            else:
-                append("null")
-            pending = -1
-        while column_open > column or (column_open == column and not mapping and not dash):
-            append("}" if mapping else "]")  # a list at a key's column ends there too
-            mapping, column_open, items = outer.pop()
-        if column_open < 0:
-            if out or dash or column:
-                raise _OutsideSubset(number)  # the document is not one block mapping
-            append("{")
-            mapping, column_open = True, 0
-        elif column_open != column or mapping == bool(dash):
-            raise _OutsideSubset(number)  # misplaced line
-        if items:
-            append(",")
-        items = True
-        if dash:
-            if not key:
-                if flow:
-                    flow = flow.replace(": ", '": ')
-                    # A flow mapping as a list item: its line goes in first.
-                    append(f'{{"":{number},{flow[1:]}' if flow[0] == "{" else flow)
-                elif numeral:
-                    append(numeral)
-                elif name and name not in _WORDS:
-                    append(f'"{name}"')
-                else:
-                    # '-' alone, or a boolean or null as a list item: never valid in a scene,
-                    # and numpy would read true as 1.0 in a list of numbers.
-                    raise _OutsideSubset(number)
-                continue
-            outer.append((mapping, column_open, True))
-            mapping, column_open = True, column + len(dash)
-            append(f'{{"":{number},"{key}":')
-        else:
-            append(f'"{key}":')
-        if flow:
-            append(flow.replace(": ", '": '))
-        elif numeral:
-            append(numeral)
-        elif name:
-            append(_WORDS.get(name) or f'"{name}"')
-        else:
-            pending = column_open
-    if column_open < 0:
-        raise _OutsideSubset("an empty document")
-    if pending >= 0:
-        append("null")
-    append("}" if mapping else "]")
-    out.extend("}" if frame[0] else "]" for frame in reversed(outer))
-    return out
 
 
 # --- checks over the plain data ----------------------------------------------------------------
@@ -298,7 +145,9 @@ def _scene(document: dict, keys: int, path: str, rendering: bool) -> Scene:
     _check(type(items) is list and len(items) > 0)
     names: set[str] = set()
     controls = _Controls(path)
-    parts = [_surface(item, i, names, controls, path) for i, item in enumerate(items)]
+    parts = _plain_surfaces(items, controls, path)
+    if parts is None:
+        parts = [_surface(item, i, names, controls, path) for i, item in enumerate(items)]
     built = tuple(controls.build())
     _check(seen + controls.keys_seen == keys)  # else a key was repeated
     surfaces = []
@@ -306,6 +155,104 @@ def _scene(document: dict, keys: int, path: str, rendering: bool) -> Scene:
         fields["controls"] = built[first:last]
         surfaces.append(_frozen(SurfaceSpec, fields))
     return Scene(path, version, units, careful.METERS_PER_UNIT[units], up, tuple(surfaces))
+
+
+_MISSING = object()  # a key not written (None is a key written with a null value)
+_PLAIN_SURFACE_KEYS = frozenset(("", "name", "type", "curve", "controls", "resolution",
+                                 "tolerance", "closed", "caps", "material"))
+_SURFACE_TYPES, _CURVES = frozenset(careful.SURFACE_TYPES), frozenset(careful.CURVES)
+_CLOSABLE_CURVES = frozenset(careful.CLOSABLE_CURVES)
+
+
+def _plain_surfaces(items: list, controls: _Controls,
+                    path: str) -> list[tuple[dict, int, int]] | None:
+    """What ``_surface`` returns for every item, checked key by key over all surfaces at once
+    (C-level maps and set tests instead of some twenty checks a surface); None, with nothing
+    added to ``controls``, unless every item is a mapping of the keys that converters write
+    (``_PLAIN_SURFACE_KEYS``; the others keep their defaults)."""
+    if set(map(type, items)) != {dict} or not all(map(_PLAIN_SURFACE_KEYS.issuperset, items)):
+        return None
+    count = len(items)
+
+    def column(key: str) -> list:
+        return list(map(dict.get, items, repeat(key), repeat(_MISSING)))
+
+    lines, names, kinds, curves = column(""), column("name"), column("type"), column("curve")
+    _check(_MISSING not in lines)
+    _check(set(map(type, names)) == {str} and all(map(_NAME.fullmatch, names))
+           and len(set(names)) == count)
+    _check(set(map(type, kinds)) == {str} and _SURFACE_TYPES.issuperset(kinds))
+    _check(set(map(type, curves)) == {str} and _CURVES.issuperset(curves))
+    closed, caps = _flags(column("closed")), _flags(column("caps"))
+    _check(_CLOSABLE_CURVES.issuperset(compress(curves, closed)))
+    _check({"circles"}.issuperset(compress(kinds, caps)) and not any(compress(closed, caps)))
+    controls.keys_seen += sum(map(len, items)) - count  # the line markers are no keys
+    key_paths = [f"surfaces[{i}]" for i in range(count)]
+    lists = column("controls")
+    _check(set(map(type, lists)) == {list}
+           and min(map(int.__sub__, map(len, lists), map(int.__add__, repeat(2), closed))) >= 0)
+    ranges = None
+    if len(set(kinds)) == 1:  # one kind throughout: every control at once, if all are plain
+        ranges = controls.add_plain_lists(lists, kinds[0] == "circles", key_paths)
+    if ranges is None:
+        ranges = []
+        for controls_list, kind, curve, closing, key_path in zip(lists, kinds, curves, closed,
+                                                                 key_paths):
+            first = len(controls.forms)
+            controls.add(controls_list, kind, curve, closing, key_path)
+            ranges.append((first, len(controls.forms)))
+    arounds, alongs, tolerances = _plain_resolutions(column("resolution"), column("tolerance"),
+                                                     kinds, controls)
+    materials = [_DEFAULT_MATERIAL if entries is _MISSING else _material(entries, controls)
+                 for entries in column("material")]
+    locations = _with_fields(Location, [{"file": path, "line": line, "key_path": key_path}
+                                        for line, key_path in zip(lines, key_paths)])
+    return [({"name": name, "type": kind, "curve": curve, "tension": 0.0, "bias": 0.0,
+              "continuity": 0.0, "closed": closing, "align": True, "controls": None,
+              "around": around, "along": along, "tolerance": tolerance, "caps": capped,
+              "material": material, "location": location, "uv": "natural", "uv_scale": None,
+              "interpolation": "blade"}, first, last)
+            for name, kind, curve, closing, capped, around, along, tolerance, material,
+            location, (first, last)
+            in zip(names, kinds, curves, closed, caps, arounds, alongs, tolerances, materials,
+                   locations, ranges)]
+
+
+def _flags(values: list, default: bool = False) -> list[bool]:
+    """Booleans of a column, ``default`` where the key was not written."""
+    _check({bool, type(_MISSING)}.issuperset(map(type, values)))
+    if _MISSING in values:
+        return [default if value is _MISSING else value for value in values]
+    return values
+
+
+def _plain_resolutions(resolutions: list, tolerances: list, kinds: list,
+                       seen: _Controls) -> tuple[list, list, list]:
+    """(around, along, tolerance) columns as ``_resolution`` reads them, surface by surface."""
+    given = [entries for entries in resolutions if entries is not _MISSING]
+    _check(set(map(type, given)) <= {dict} and all(map(_RESOLUTION_KEYS.issuperset, given)))
+    seen.keys_seen += sum(map(len, given))
+    arounds = [careful.DEFAULT_AROUND if entries is _MISSING
+               else entries.get("around", careful.DEFAULT_AROUND) for entries in resolutions]
+    alongs = [careful.DEFAULT_ALONG if entries is _MISSING
+              else entries.get("along", careful.DEFAULT_ALONG) for entries in resolutions]
+    _check(set(map(type, arounds)) == {int} and set(map(type, alongs)) == {int})
+    _check(min(alongs) >= 2 and max(alongs) <= careful.MAX_RESOLUTION
+           and min(arounds) >= 2 and max(arounds) <= careful.MAX_RESOLUTION)
+    _check(min(compress(arounds, map("circles".__eq__, kinds)), default=3) >= 3)
+    if all(value is _MISSING for value in tolerances):
+        return arounds, alongs, [None] * len(tolerances)
+    values = []
+    for i, value in enumerate(tolerances):
+        if value is _MISSING:
+            values.append(None)
+            continue
+        _check(resolutions[i] is _MISSING)
+        value = _number(value)
+        _check(value > 0.0)
+        values.append(value)
+        arounds[i] = alongs[i] = None
+    return arounds, alongs, values
 
 
 def _surface(entries: object, index: int, names: set[str], controls: _Controls,
@@ -415,6 +362,8 @@ class _Controls:
     def add(self, items: object, kind: str, curve: str, closed: bool, key_path: str) -> None:
         _check(type(items) is list and len(items) >= (3 if closed else 2))
         circles = kind == "circles"
+        if self._add_plain(items, circles, key_path):
+            return
         allowed = _CIRCLE_KEYS_LINE if circles else _POINT_PAIR_KEYS_LINE
         rational = curve == "rational_bezier"
         weights = []
@@ -451,57 +400,113 @@ class _Controls:
             largest = max(weights)
             _check(all(weight * careful.MAX_WEIGHT_RATIO >= largest for weight in weights))
 
+    def add_plain_lists(self, lists: list[list], circles: bool,
+                        key_paths: list[str]) -> list[tuple[int, int]] | None:
+        """Add the controls of every list (of surfaces ``key_paths``, all of one kind) if
+        every one is of the plain shape (see ``_add_plain``), by maps over all of them at
+        once; the range of each list's controls, or None with nothing added."""
+        counts = list(map(len, lists))
+        paths = map(str.__add__, chain.from_iterable(map(repeat, key_paths, counts)),
+                    chain.from_iterable(map(_control_suffixes, counts)))
+        first = len(self.forms)
+        if not self._add_plain(list(chain.from_iterable(lists)), circles, paths):
+            return None
+        ends = list(accumulate(counts, initial=first))
+        return list(zip(ends, ends[1:]))
+
+    def _add_plain(self, items: list, circles: bool, key_path) -> bool:
+        """Add ``items`` if every one is a mapping of exactly the plain keys (center, normal
+        and radius; a and b), by C-level maps over the list; False (nothing added) if not.
+        ``key_path``: the list's (str), or an iterable of each item's."""
+        row, width = (_CIRCLE_ROW, 4) if circles else (_PAIR_ROW, 3)
+        try:
+            rows = list(map(row, items))
+        except (KeyError, TypeError):  # a key missing, or an item that is not a mapping
+            return False
+        count = len(rows)
+        if sum(map(len, items)) != width * count:  # a key more than the plain ones
+            return False
+        columns = tuple(zip(*rows))
+        self.lines += columns[0]
+        if circles:
+            self.centers += columns[1]
+            self.normals += columns[2]
+            self.radii += columns[3]
+        else:
+            self.ends_a += columns[1]
+            self.ends_b += columns[2]
+        self.keys_seen += (width - 1) * count
+        if type(key_path) is str:
+            self.key_paths += map(key_path.__add__, _control_suffixes(count))
+        else:
+            self.key_paths += key_path  # one for each item, made by the caller
+        self.weights += repeat(1.0, count)
+        self.forms += repeat(_CIRCLE if circles else _PAIR, count)
+        return True
+
     def build(self) -> list[CircleControl | PointPairControl]:
         """The specs, in file order, once every number has passed."""
-        centers = _lengths(self.centers, (len(self.centers), 3))
-        normals = _numbers(self.normals, (len(self.normals), 3))
-        _check(bool(np.all(np.any(normals != 0.0, axis=1))))
-        radii = _lengths(self.radii, (len(self.radii),))
-        _check(bool(np.all(radii > 0.0)))
-        ends_a = _lengths(self.ends_a, (len(self.ends_a), 3))
-        ends_b = _lengths(self.ends_b, (len(self.ends_b), 3))
-        for i in np.flatnonzero(_maybe_coincident(ends_a, ends_b)):
-            _check(not careful._coincident(tuple(ends_a[i].tolist()), tuple(ends_b[i].tolist())))
-        count = len(self.forms)
-        locations = _instances(Location, ("file", "line", "key_path"),
-                               zip(repeat(self.path, count), self.lines, self.key_paths))
-        forms = np.array(self.forms, dtype=np.int8)
-        parts = {}
-        for form, cls, keys, columns in (
-                (_CIRCLE, CircleControl, _CIRCLE_FIELDS,
-                 lambda n: (map(tuple, centers.tolist()), map(tuple, normals.tolist()),
-                            radii.tolist(), repeat(None, n))),
-                (_PAIR, PointPairControl, _PAIR_FIELDS,
-                 lambda n: (map(tuple, ends_a.tolist()), map(tuple, ends_b.tolist()))),
-                (_THROUGH, CircleControl, _CIRCLE_FIELDS,
-                 lambda n: (repeat(None, n), repeat(None, n), repeat(None, n), self.throughs))):
-            where = np.flatnonzero(forms == form).tolist()
-            if where:
-                weights = [self.weights[i] for i in where]
-                mine = [locations[i] for i in where]
-                parts[form] = (where, _instances(cls, keys, zip(*columns(len(where)), weights, mine)))
-        if len(parts) == 1:
-            return next(iter(parts.values()))[1]
-        built = [None] * count
-        for where, instances in parts.values():
-            for i, instance in zip(where, instances):
-                built[i] = instance
+        limit = careful.MAX_LENGTH
+        centers, normals = _vectors(self.centers, limit), _vectors(self.normals)
+        radii = _floats(self.radii, limit)
+        ends_a, ends_b = _vectors(self.ends_a, limit), _vectors(self.ends_b, limit)
+        _check((0.0, 0.0, 0.0) not in normals and (not radii or min(radii) > 0.0))
+        if ends_a:
+            for i in np.flatnonzero(_maybe_coincident(np.array(ends_a), np.array(ends_b))).tolist():
+                _check(not careful._coincident(ends_a[i], ends_b[i]))
+        path = self.path
+        locations = _with_fields(Location, [{"file": path, "line": line, "key_path": key_path}
+                                            for line, key_path in zip(self.lines, self.key_paths)])
+        forms = self.forms
+        count = len(forms)
+        circles = forms.count(_CIRCLE)
+        if circles == count:  # the common case: every control a circle given by its center
+            return _with_fields(CircleControl, [
+                {"center": center, "normal": normal, "radius": radius, "through": None,
+                 "weight": weight, "location": location}
+                for center, normal, radius, weight, location
+                in zip(centers, normals, radii, self.weights, locations)])
+        if forms.count(_PAIR) == count:
+            return _with_fields(PointPairControl, [
+                {"a": a, "b": b, "weight": weight, "location": location}
+                for a, b, weight, location in zip(ends_a, ends_b, self.weights, locations)])
+        built = []
+        circle, pair = iter(zip(centers, normals, radii)), iter(zip(ends_a, ends_b))
+        through = iter(self.throughs)
+        for form, weight, location in zip(forms, self.weights, locations):
+            if form == _PAIR:
+                a, b = next(pair)
+                fields = {"a": a, "b": b, "weight": weight, "location": location}
+            else:
+                center, normal, radius = next(circle) if form == _CIRCLE else (None, None, None)
+                fields = {"center": center, "normal": normal, "radius": radius,
+                          "through": next(through) if form == _THROUGH else None,
+                          "weight": weight, "location": location}
+            built.append(_frozen(PointPairControl if form == _PAIR else CircleControl, fields))
         return built
 
 
 _CIRCLE, _PAIR, _THROUGH = 0, 1, 2
-_CIRCLE_FIELDS = ("center", "normal", "radius", "through", "weight", "location")
-_PAIR_FIELDS = ("a", "b", "weight", "location")
+_CIRCLE_ROW = itemgetter("", "center", "normal", "radius")
+_PAIR_ROW = itemgetter("", "a", "b")
+_SUFFIXES: list[str] = []
+
+
+def _control_suffixes(count: int) -> list[str]:
+    """'.controls[0]' ... '.controls[count - 1]' (made once, shared by every surface)."""
+    if len(_SUFFIXES) < count:
+        _SUFFIXES.extend(f".controls[{i}]" for i in range(len(_SUFFIXES), count))
+    return _SUFFIXES[:count]
+
+
 _CIRCLE_KEYS_LINE = _CIRCLE_KEYS | {""}
 _POINT_PAIR_KEYS_LINE = _POINT_PAIR_KEYS | {""}
 
 
-def _instances(cls: type, keys: tuple[str, ...], rows) -> list:
-    """Frozen dataclass instances of ``cls`` from rows of field values in ``keys`` order, as
-    ``_frozen`` builds them, by maps over builtins (no Python-level loop)."""
-    rows = list(rows)
-    instances = list(map(_new, repeat(cls, len(rows))))
-    fields = map(dict, map(zip, repeat(keys), rows))
+def _with_fields(cls: type, fields: list[dict]) -> list:
+    """Frozen dataclass instances of ``cls``, one per dict of field values, as ``_frozen``
+    builds them, by maps over builtins (no Python-level loop)."""
+    instances = list(map(_new, repeat(cls, len(fields))))
     deque(map(_set, instances, repeat("__dict__"), fields), maxlen=0)
     return instances
 
@@ -515,27 +520,31 @@ def _count_keys(value: object) -> int:
     return 0
 
 
-def _numbers(values: list, shape: tuple[int, ...]) -> np.ndarray:
-    """``values`` as a float64 array of ``shape``, all finite; ints read as the careful
-    reader reads them (float(int)), anything else (bool, text, None, a huge int) refused."""
+def _floats(values: list, limit: float = math.inf) -> list[float]:
+    """``values`` as the careful reader's ``number`` reads them (an int as float(int)), all
+    finite and at most ``limit`` in size; anything else (bool, text, None, a list, a huge
+    int) refused. By C-level maps and reductions over the whole list."""
+    kinds = set(map(type, values))
+    if not kinds <= {float}:
+        _check(kinds <= {float, int})
+        try:
+            values = list(map(float, values))
+        except OverflowError:
+            raise _OutsideSubset("a huge integer") from None
+    # A NaN or an infinity makes the sum so; a sum that overflows only sends the file to
+    # the careful reader.
+    _check(not values or (math.isfinite(sum(values))
+                          and -limit <= min(values) and max(values) <= limit))
+    return values
+
+
+def _vectors(values: list, limit: float = math.inf) -> list[tuple[float, float, float]]:
+    """``values``, lists of three numbers each (as ``_floats``), as tuples."""
     if not values:
-        return np.zeros(shape)
-    try:
-        array = np.array(values)
-    except (ValueError, TypeError):
-        raise _OutsideSubset("ragged") from None
-    # The subset's flow collections hold only numbers, so a list of numbers is int64 or float64;
-    # anything else (None for a missing key, a nested list, a huge int) is object or another shape.
-    _check(array.shape == shape and array.dtype.kind in "if")
-    array = array.astype(np.float64)
-    _check(bool(np.all(np.isfinite(array))))
-    return array
-
-
-def _lengths(values: list, shape: tuple[int, ...]) -> np.ndarray:
-    array = _numbers(values, shape)
-    _check(bool(np.all(np.abs(array) <= careful.MAX_LENGTH)))
-    return array
+        return []
+    _check(set(map(type, values)) == {list} and set(map(len, values)) == {3})
+    triples = iter(_floats(list(chain.from_iterable(values)), limit))
+    return list(zip(triples, triples, triples))
 
 
 def _maybe_coincident(a: np.ndarray, b: np.ndarray) -> np.ndarray:
