@@ -45,9 +45,9 @@ def test_batched_run_within_its_estimate_and_proportional_to_output(tmp_path):
         longest_chain=int(np.diff(lines.offsets).max()))
     assert estimated_vertices >= vertices
     assert peak <= estimate, (peak, estimate)
-    # the merged float64 mesh is about twice the file; the weld's scratch and a chunk come on
-    # top (measured 3.1x traced here; the whole 3,000-streamline process, 2.8x)
-    assert peak <= 3.5 * written, (peak, written)
+    # the merged float64 mesh is about twice the file and a chunk comes on top; no weld is
+    # made (measured 2.3x traced here, 3.1x while the merge welded)
+    assert peak <= 2.8 * written, (peak, written)
     # doubling the input doubles the peak, not more (nothing held per piece beyond the mesh)
     peak_twice, _, written_twice = _peak_of_run(_repeated(8), tmp_path / "twice.glb")
     assert peak_twice <= 2.3 * peak, (peak_twice, peak)

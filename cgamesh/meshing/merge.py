@@ -1,8 +1,17 @@
 """Many meshes into one: a whole neuron or tractogram as one mesh, one draw call.
 
 Positions, normals, UVs, colours and attributes are stacked, faces shifted by each piece's
-vertex offset (32-bit indices unless 2^31 vertices are exceeded), and the weld recomputed over
-all positions, so a viewer or a checker sees pieces that share a vertex as connected.
+vertex offset (32-bit indices unless 2^31 vertices are exceeded).
+
+Two channels of the pieces are not carried over, since nothing downstream of a merge reads
+them and they cost as much as a third of the merged mesh:
+
+- the weld: a merged mesh leaves ``weld`` None, and what needs one derives it from the
+  positions (``weld_by_position``: the USD writer, the quality report), exactly the map a merge
+  would store. The glTF writer never needs it, and weld scratch (five arrays of V integers)
+  would come on top of the whole merged mesh, the largest moment of a run.
+- ``uv_lengths``: they scale natural UVs, applied to each surface before any merge; one merged
+  UV set of many tubes has no one length scale.
 
 ``MergedMesh`` takes the pieces one at a time into arrays allocated once, so a producer that
 hands over each piece as it is made (the batched pass, chunk by chunk) never holds the pieces
@@ -16,18 +25,17 @@ from collections.abc import Sequence
 import numpy as np
 
 from cgamesh.meshing.mesh import SurfaceMesh
-from cgamesh.meshing.weld import weld_by_position
 
 # Per-vertex channels (name, columns); a channel is kept when every piece has it.
-_CHANNELS = (("positions", 3), ("normals", 3), ("uvs", 2), ("tangents", 4), ("uv_lengths", 2), ("colors", 3))
-_OPTIONAL = ("tangents", "uv_lengths", "colors")
+_CHANNELS = (("positions", 3), ("normals", 3), ("uvs", 2), ("tangents", 4), ("colors", 3))
 
 
 def merge(pieces: Sequence[SurfaceMesh], name: str) -> SurfaceMesh:
     """One mesh of every piece, in order.
 
     Colours are kept when every piece has them, and an attribute when every piece has it;
-    tangents when every piece has them; ``uv_lengths`` likewise. ``double_sided`` if any piece is.
+    tangents when every piece has them. ``double_sided`` if any piece is. No weld and no
+    ``uv_lengths`` (see the module).
     """
     if not pieces:
         raise ValueError("merge needs at least one mesh")
@@ -87,7 +95,7 @@ class MergedMesh:
         return self._pieces == 0
 
     def finish(self, name: str) -> SurfaceMesh:
-        """The merged mesh, welded; 32-bit indices below 2^31 vertices."""
+        """The merged mesh (no weld, see the module); 32-bit indices below 2^31 vertices."""
         if not self._pieces:
             raise ValueError("merge needs at least one mesh")
         v = self._vertices
@@ -97,8 +105,7 @@ class MergedMesh:
         return SurfaceMesh(
             name=name, positions=channels["positions"], normals=channels["normals"], uvs=channels["uvs"],
             faces=faces, double_sided=self._double_sided,
-            tangents=channels.get("tangents"), uv_lengths=channels.get("uv_lengths"), colors=channels.get("colors"),
-            weld=weld_by_position(channels["positions"]).astype(index),
+            tangents=channels.get("tangents"), colors=channels.get("colors"),
             attributes=None if self._attributes is None else {k: a[:v] for k, a in sorted(self._attributes.items())})
 
     def _reserve(self, vertices: int, triangles: int) -> None:
