@@ -63,6 +63,9 @@ _GLB_MAGIC = 0x46546C67  # b"glTF"
 _CHUNK_JSON = 0x4E4F534A  # b"JSON"
 _CHUNK_BIN = 0x004E4942  # b"BIN\0"
 QUANTIZATION = "KHR_mesh_quantization"
+# float32 normals within this of unit length are a float64 unit normal rounded once (each
+# component within half an ulp, 6e-8 relative): stored as they are
+FLOAT32_UNIT = 1e-6
 # glTF's numeric constants (component types, buffer targets, primitive mode)
 BYTE, SHORT, UNSIGNED_SHORT, UNSIGNED_INT, FLOAT = 5120, 5122, 5123, 5125, 5126
 ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
@@ -370,9 +373,13 @@ def _describe_mesh(doc, offset, mesh, layout, up, scale, path):
     accessor("POSITION", min=bounds(pos_min), max=bounds(pos_max))
 
     # Normalise in float64 and round once: the stored vector is then as close to unit length
-    # as its type allows (the validator checks it), with the axis map applied.
+    # as its type allows (the validator checks it), with the axis map applied. float32 normals
+    # that are unit within float32's rounding are what this stored already (a merged mesh held
+    # as written, cgamesh.meshing.merge): they are copied as they are, which is the same bytes.
     length = normal_lengths(mesh, path)
-    normals = np.asarray(mesh.normals, dtype=np.float64)
+    normals = np.asarray(mesh.normals)
+    if normals.dtype == np.float32 and not layout.quantize and np.abs(length - 1.0).max() <= FLOAT32_UNIT:
+        length = None
     accessor("NORMAL")
 
     tangent_rows = None
@@ -399,7 +406,7 @@ def _describe_mesh(doc, offset, mesh, layout, up, scale, path):
         if name == "POSITION":
             map_positions(out, positions[rows])
         elif name == "NORMAL":
-            _map_unit(out, normals[rows], perm, np.asarray(sign), length[rows])
+            _map_unit(out, normals[rows], perm, np.asarray(sign), None if length is None else length[rows])
         elif name == "TANGENT":
             xyz, w, tangent_length = tangent_rows
             _map_unit(out[:, :3], xyz[rows], perm, np.asarray(sign), tangent_length[rows])
@@ -494,7 +501,8 @@ def _map_axes(out, a, perm, factor, *, shift=None, divisor=None, rounding=False)
 
 
 def _map_unit(out, a, perm, sign, length) -> None:
-    """Unit vectors a / length (n, 3), axis-mapped, into float32 or normalized int8 ``out``."""
+    """Unit vectors a / length (n, 3), axis-mapped, into float32 or normalized int8 ``out``;
+    ``length`` None: float32 ``a`` stored as it is (float32 ``out`` only)."""
     if not np.issubdtype(out.dtype, np.integer):
         _map_axes(out, a, perm, sign, divisor=length)
         return
