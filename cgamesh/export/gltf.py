@@ -55,7 +55,7 @@ import numpy as np
 from cgamesh.errors import ExportError
 from cgamesh.export.atomic import atomic_files, atomic_write
 from cgamesh.export.checks import (FLOAT32_MAX, check_arguments, check_channels, check_material, check_shapes,
-                                   column_bounds, normal_lengths)
+                                   column_bounds, normal_length_error, normal_lengths)
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
 
@@ -376,10 +376,11 @@ def _describe_mesh(doc, offset, mesh, layout, up, scale, path):
     # as its type allows (the validator checks it), with the axis map applied. float32 normals
     # that are unit within float32's rounding are what this stored already (a merged mesh held
     # as written, cgamesh.meshing.merge): they are copied as they are, which is the same bytes.
-    length = normal_lengths(mesh, path)
     normals = np.asarray(mesh.normals)
-    if normals.dtype == np.float32 and not layout.quantize and np.abs(length - 1.0).max() <= FLOAT32_UNIT:
+    if normals.dtype == np.float32 and not layout.quantize and normal_length_error(mesh, path) <= FLOAT32_UNIT:
         length = None
+    else:
+        length = normal_lengths(mesh, path)
     accessor("NORMAL")
 
     tangent_rows = None
