@@ -94,7 +94,8 @@ def _fornix_part(streamlines: int) -> Centerlines:
 def test_real_inputs_held_as_written_write_the_same_bytes(tmp_path, color_by):
     from dataclasses import replace
 
-    for name, lines, radius in (("fornix", _fornix_part(40), 0.5), ("neuron", read_centerlines(str(smallest_neuron())), None)):
+    inputs = (("fornix", _fornix_part(40), 0.5), ("neuron", read_centerlines(str(smallest_neuron())), None))
+    for name, lines, radius in inputs:
         if name == "neuron":  # the root a soma: its chains go the per-chain way, and soma spheres join
             kinds = lines.kinds.copy()
             kinds[np.flatnonzero(lines.parents < 0)] = 1
@@ -104,7 +105,7 @@ def test_real_inputs_held_as_written_write_the_same_bytes(tmp_path, color_by):
         exact = mesh_centerlines(lines, options).meshes[0]
         assert held.normals.dtype == np.float32 and exact.normals.dtype == np.float64
         # attributes colours are made from stay exact; the others are held as float32
-        kept = {"none": (), "direction": (), "radius": ("radius", "segment"), "segment": ("radius", "segment")}[color_by]
+        kept = () if color_by in ("none", "direction") else ("radius", "segment")
         for key, values in held.attributes.items():
             assert values.dtype == (np.float64 if key in kept else np.float32), (key, values.dtype)
         assert (held.colors is None) == (color_by == "none")
