@@ -4,7 +4,7 @@ Positions, normals, UVs, colours and attributes are stacked, faces shifted by ea
 vertex offset (32-bit indices unless 2^31 vertices are exceeded).
 
 Two channels of the pieces are not carried over, since nothing downstream of a merge reads
-them and they cost as much as a third of the merged mesh:
+them and on a tractogram they were a sixth of the merged mesh:
 
 - the weld: a merged mesh leaves ``weld`` None, and what needs one derives it from the
   positions (``weld_by_position``: the USD writer, the quality report), exactly the map a merge
@@ -18,8 +18,8 @@ writer stores them, float32, for a run whose every output is a plain (unquantize
 the normals as the writer's single rounding of each float64 normal over its length (so the
 writer copies them as they are), colours and attributes rounded once to float32 (the writer's
 own cast, and clipping to [0, 1] commutes with it). Files are byte for byte those written from
-the float64 mesh; on a tractogram the merged mesh holds 81 bytes a vertex instead of 101 (its GLB: 61).
-Attributes that colours are computed from after the merge stay float64 (``exact_attributes``).
+the float64 mesh; on a tractogram the merged mesh holds 81 bytes a vertex instead of 101 (its
+GLB stores 61). Attributes that colours are computed from after the merge stay float64 (``exact_attributes``).
 
 ``MergedMesh`` takes the pieces one at a time into arrays allocated once, so a producer that
 hands over each piece as it is made (the batched pass, chunk by chunk) never holds the pieces
