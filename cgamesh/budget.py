@@ -180,9 +180,9 @@ def export_bytes(suffixes, vertices: int, tangents: bool = False) -> int:
 
 
 # The batched pass of centreline inputs meshes chunks of at most this many rings (its
-# CHUNK_RINGS, and one chain longer than that) into the merged mesh, then welds it.
+# CHUNK_RINGS, and one chain longer than that) into the merged mesh (which is not welded:
+# cgamesh.meshing.merge).
 BATCHED_CHUNK_RINGS = 2048
-WELD_PER_VERTEX = 48
 
 
 def centerline_bytes(points: int, chains: int, around: int, subdivide: int, suffixes=(),
@@ -193,8 +193,8 @@ def centerline_bytes(points: int, chains: int, around: int, subdivide: int, suff
     estimate made before anything is read into meshes, written to ``suffixes``.
 
     ``batched``: the batched pass (cgamesh.meshing.batch_pass) makes the meshes, a chunk at a
-    time into the merged mesh: the merged mesh, the weld's scratch and one chunk's meshing
-    (of at most ``longest_chain`` nodes' rings beyond a chunk), not a whole mesh's meshing peak."""
+    time into the merged mesh: the merged mesh and one chunk's meshing (of at most
+    ``longest_chain`` nodes' rings beyond a chunk), not a whole mesh's meshing peak."""
     rings = points * (subdivide + 1) + chains
     sphere = (around + 1) * (around // 2 + 1)
     vertices = rings * (around + 1) + chains * sphere
@@ -202,7 +202,7 @@ def centerline_bytes(points: int, chains: int, around: int, subdivide: int, suff
         chunk_rings = min(rings, BATCHED_CHUNK_RINGS + (points if longest_chain is None else longest_chain)
                           * (subdivide + 1))
         _, chunk = surface_bytes("circles", around, chunk_rings, tangents=tangents)
-        peak = (HELD_PER_VERTEX + WELD_PER_VERTEX) * vertices + chunk
+        peak = HELD_PER_VERTEX * vertices + chunk
     else:
         _, peak = surface_bytes("circles", around, rings + chains * (around // 2 + 1), tangents=tangents)
     return vertices, peak + export_bytes(suffixes, vertices, tangents)

@@ -133,13 +133,15 @@ class _ChainList:
 
 def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
                      progress: Callable[..., None] = lambda label, count=1: None,
-                     batched: bool = True) -> TubeMeshes:
+                     batched: bool = True, as_written: bool = False) -> TubeMeshes:
     """Tubes along every chain of ``lines`` with their junction and soma spheres (see the module).
 
     ``progress(label, count)`` after every ``count`` chains. ``batched``: mesh the chains in
     one vectorised pass (cgamesh.meshing.batch_pass; same meshes within 1e-12 relative) where
     the options allow it (a fixed resolution, no caps, not watertight); else, or when False,
-    one chain at a time.
+    one chain at a time. ``as_written``: a merged mesh holds its normals, colours and the
+    attributes no colour is made from as the glTF writer stores them, float32
+    (cgamesh.meshing.merge; for runs that write only unquantized glTF files, byte for byte the same).
     """
     _check_options(lines, options)
     radii = _radii(lines, options)
@@ -159,7 +161,8 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
         from cgamesh.meshing.merge import MergedMesh
 
         vertices, triangles = _expected_size(chains, junctions, soma, options)
-        merged = MergedMesh(vertices, triangles)
+        exact = () if options.color_by in ("none", "direction") else ("radius", "segment", "scalar")
+        merged = MergedMesh(vertices, triangles, as_written=as_written, exact_attributes=exact)
         sink = merged.append
     else:
         sink = pieces.append

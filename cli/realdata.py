@@ -98,8 +98,11 @@ def run(args: argparse.Namespace) -> str | int:
                                           batched=uses_batched_pass(options) and not options.split,
                                           longest_chain=longest)
         Budget.of(args.max_memory).require(peak, args.scene, f"memory for {vertices} vertices of tubes")
+    # every output a plain glTF file and nothing else reading the mesh: hold it as they store it
+    as_written = (all(o.suffix.lower() in (".glb", ".gltf") for o in outputs) and not args.quantize
+                  and not args.tangents and not args.report)
     with Progress(chains, enabled=not args.quiet) as progress:
-        built = mesh_centerlines(lines, options, progress=progress.advance)
+        built = mesh_centerlines(lines, options, progress=progress.advance, as_written=as_written)
     surfaces = [(mesh, built.material) for mesh in built.meshes]
     failures = []
     with all_or_nothing():  # every output, sidecar and the report, or none of them

@@ -298,3 +298,38 @@ def test_glb_container_layout(tmp_path, scene):
     bin_length, bin_type = np.frombuffer(data[20 + json_length : 28 + json_length], "<u4")
     assert bin_type == 0x004E4942 and bin_length % 4 == 0 and 28 + json_length + bin_length == len(data)
     assert doc["buffers"] == [{"byteLength": int(bin_length)}]
+
+
+def _stored_normals(path):
+    gltf = pygltflib.GLTF2().load(str(path))
+    blob = gltf.binary_blob()
+    return read_accessor(gltf, blob, gltf.meshes[0].primitives[0].attributes.NORMAL)
+
+
+def test_float32_normals_unit_within_rounding_are_stored_as_they_are_others_normalised(tmp_path):
+    mesh = torus_patch("tube", 300, 240)  # 72,000 vertices: more than one block of rows
+    assert mesh.vertex_count > 65536
+    rounded = mesh.normals.astype(np.float32)  # unit within float32's rounding
+    stored = _stored_normals_of(tmp_path / "rounded.glb", _with(mesh, normals=rounded))
+    np.testing.assert_array_equal(stored, rounded @ AXIS_MAP["z"].T.astype(np.float32))
+    # float32 normals 1e-4 off unit length are normalised in float64 and rounded once
+    long = (mesh.normals * (1.0 + 1e-4)).astype(np.float32)
+    stored = _stored_normals_of(tmp_path / "long.glb", _with(mesh, normals=long))
+    unit = long.astype(np.float64) / np.linalg.norm(long.astype(np.float64), axis=1, keepdims=True)
+    np.testing.assert_array_equal(stored, (unit @ AXIS_MAP["z"].T).astype(np.float32))
+
+
+@pytest.mark.parametrize("value", [np.nan, 1.01])
+def test_bad_float32_normals_name_their_vertex_in_any_block(tmp_path, value):
+    mesh = torus_patch("tube", 300, 240)
+    normals = mesh.normals.astype(np.float32)
+    normals[70000] *= value
+    with pytest.raises(ExportError, match="'tube': normals must be finite unit vectors, vertex 70000 has"):
+        write_glb(tmp_path / "bad.glb", [(_with(mesh, normals=normals), Material())], up="z",
+                  meters_per_unit=1.0, source_units="m")
+    assert os.listdir(tmp_path) == []
+
+
+def _stored_normals_of(path, mesh):
+    write_glb(path, [(mesh, Material())], up="z", meters_per_unit=1.0, source_units="m")
+    return _stored_normals(path)

@@ -8,6 +8,7 @@ import pytest
 from cgamesh.meshing.junctions import sphere_bands, uv_spheres
 from cgamesh.meshing.merge import merge
 from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.meshing.weld import weld_by_position
 
 
 @pytest.mark.parametrize("around", [3, 4, 8, 13])
@@ -50,8 +51,10 @@ def test_merge_offsets_faces_and_keeps_colours_and_shared_attributes():
     assert merged.faces.dtype == np.int32
     assert set(merged.attributes) == {"radius"}
     np.testing.assert_array_equal(merged.colors[:, 0], np.r_[np.full(a.vertex_count, 0.25), np.full(b.vertex_count, 0.75)])
-    # the weld joins the bit-identical pole the two spheres share
+    # no weld is stored (consumers derive it from the positions); the positional weld joins the
+    # bit-identical pole the two spheres share
+    assert merged.weld is None and merged.uv_lengths is None
     top_of_a = np.flatnonzero(np.all(merged.positions == [0.0, 0.0, 1.0], axis=1))
-    assert len(top_of_a) == 2 * 5 and len(set(merged.weld[top_of_a].tolist())) == 1
+    assert len(top_of_a) == 2 * 5 and len(set(weld_by_position(merged.positions)[top_of_a].tolist())) == 1
     # without colours on every piece, none
     assert merge([a, b2], "mixed").colors is None

@@ -25,7 +25,6 @@ is the command line's last resort on an interrupt.
 from __future__ import annotations
 
 import os
-import secrets
 import signal
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -42,6 +41,13 @@ except ImportError:  # not on Windows: commits there are not serialised between 
 LIVE_TEMPORARIES: set[Path] = set()
 _STAGES: list[list[tuple[Path, Path]]] = []  # open all_or_nothing blocks, innermost last
 _SIGNALS = {signal.SIGINT, signal.SIGTERM}
+
+
+def _token() -> str:
+    """12 random hex digits naming a temporary file. os.urandom, as ``secrets.token_hex`` uses,
+    without ``secrets``' import of hmac and OpenSSL (3.5 MB resident, a third of a small
+    neuron's GLB)."""
+    return os.urandom(6).hex()
 
 
 @contextmanager
@@ -144,7 +150,7 @@ def _backup(target: Path) -> Path | None:
     if not target.is_file():
         return None
     while True:
-        link = target.parent / f".{target.name}.{secrets.token_hex(6)}.old"
+        link = target.parent / f".{target.name}.{_token()}.old"
         try:
             os.link(target, link)
         except FileExistsError:
@@ -268,7 +274,7 @@ def _create_temp_beside(target: Path, suffix: str = "") -> tuple[Path, int]:
     directory = target.parent
     while True:
         # A hidden name so that directory listings and globs (*.glb) do not pick it up.
-        tmp = directory / f".{target.name}.{secrets.token_hex(6)}.tmp{suffix}"
+        tmp = directory / f".{target.name}.{_token()}.tmp{suffix}"
         blocked = _block_signals()  # an interrupt between creating and listing it would leak it
         try:
             # os.open with mode 0o666 lets the umask decide the final permissions, as a plain

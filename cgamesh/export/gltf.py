@@ -28,16 +28,20 @@ SCALAR application-specific attribute per named attribute, its name upper-cased 
 underscore (``radius`` -> ``_RADIUS``), as glTF reserves for custom semantics; never quantized.
 Indices are uint16 when every index fits (below 65535, the primitive-restart value), else uint32.
 
-The document model is pygltflib's; the containers are assembled here (pygltflib's own save
-path copies the blob several times and alone costs about as much as all of this module). The
-binary chunk is never held whole: every check and every accessor's bounds come first (the
-position bounds from the extreme coordinates, as the mapping to stored values is monotone),
-then each view is computed a block of vertices at a time into one small buffer and written,
-so writing a mesh needs a few MB beyond the mesh itself.
+The JSON document is built here as plain objects (``_Document``), in the key order pygltflib
+writes and without its empty or unset members, so files are byte for byte those written through
+pygltflib before: a run that writes a GLB then imports neither pygltflib nor its
+dataclasses-json and marshmallow (2-3.5 MB resident, a quarter of a small neuron's GLB), and pygltflib's
+own save path copied the blob several times. The binary chunk is never held whole: every check
+and every accessor's bounds come first (the position bounds from the extreme coordinates, as
+the mapping to stored values is monotone), then each view is computed a block of vertices at a
+time into one small buffer and written, so writing a mesh needs a few MB beyond the mesh
+itself.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import struct
 from collections.abc import Sequence
@@ -47,12 +51,11 @@ from pathlib import Path
 from urllib.parse import quote
 
 import numpy as np
-import pygltflib as g
 
 from cgamesh.errors import ExportError
 from cgamesh.export.atomic import atomic_files, atomic_write
 from cgamesh.export.checks import (FLOAT32_MAX, check_arguments, check_channels, check_material, check_shapes,
-                                   column_bounds, normal_lengths)
+                                   column_bounds, normal_length_error, normal_lengths)
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
 
@@ -60,6 +63,15 @@ _GLB_MAGIC = 0x46546C67  # b"glTF"
 _CHUNK_JSON = 0x4E4F534A  # b"JSON"
 _CHUNK_BIN = 0x004E4942  # b"BIN\0"
 QUANTIZATION = "KHR_mesh_quantization"
+# float32 normals within this of unit length are a float64 unit normal rounded once (each
+# component within half an ulp, 6e-8 relative): stored as they are
+FLOAT32_UNIT = 1e-6
+# glTF's numeric constants (component types, buffer targets, primitive mode)
+BYTE, SHORT, UNSIGNED_SHORT, UNSIGNED_INT, FLOAT = 5120, 5122, 5123, 5125, 5126
+ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
+TRIANGLES = 4
+_TYPES = {1: "SCALAR", 2: "VEC2", 3: "VEC3", 4: "VEC4"}
+_ATTRIBUTE_SLOTS = ("POSITION", "NORMAL", "TANGENT", "TEXCOORD_0", "TEXCOORD_1", "COLOR_0", "JOINTS_0", "WEIGHTS_0")
 
 # Signed axis permutation (output axis j = sign_j * input axis src_j) from the scene's frame to
 # glTF's +Y-up frame.
@@ -90,7 +102,7 @@ def write_glb(
     """
     doc, blob = build_document(path, surfaces, up=up, meters_per_unit=meters_per_unit,
                                source_units=source_units, tangents=tangents, quantize=quantize)
-    doc.buffers.append(g.Buffer(byteLength=blob.nbytes))
+    doc.buffers.append({"byteLength": blob.nbytes})
     json_bytes = _json_bytes(path, doc)
     json_bytes += b" " * (_pad4(len(json_bytes)) - len(json_bytes))
     # Each mesh's views are padded to 4 bytes, so the blob already is.
@@ -127,7 +139,7 @@ def write_gltf(
         raise ExportError(f"cannot export {path}: a .gltf file needs a name that does not end in .bin")
     doc, blob = build_document(path, surfaces, up=up, meters_per_unit=meters_per_unit,
                                source_units=source_units, tangents=tangents, quantize=quantize)
-    doc.buffers.append(g.Buffer(byteLength=blob.nbytes, uri=quote(bin_path.name)))
+    doc.buffers.append({"uri": quote(bin_path.name), "byteLength": blob.nbytes})
     json_bytes = _json_bytes(path, doc)
     with atomic_files([bin_path, target]) as (bin_file, json_file):
         blob.write_to(bin_file)
@@ -136,7 +148,7 @@ def write_gltf(
 
 
 def build_document(path, surfaces, *, up, meters_per_unit, source_units, tangents=False,
-                   quantize=False) -> tuple[g.GLTF2, "_Blob"]:
+                   quantize=False) -> tuple["_Document", "_Blob"]:
     """The glTF document (without its buffer) and the binary blob of every surface, described
     (every check made, every accessor's bounds known) but not yet computed: ``_Blob.write_to``
     computes and writes it a block of vertices at a time."""
@@ -148,13 +160,10 @@ def build_document(path, surfaces, *, up, meters_per_unit, source_units, tangent
         check_channels(mesh, path)
         layouts.append(_Layout(mesh, tangents, quantize))
 
-    doc = g.GLTF2(
-        asset=g.Asset(
-            generator=f"cgamesh {_version()}",
-            extras={"source_units": source_units, "meters_per_unit": scale, "source_up": up},
-        ),
-        scene=0,
-        scenes=[g.Scene(nodes=list(range(len(surfaces))))],
+    doc = _Document(
+        asset={"extras": {"source_units": source_units, "meters_per_unit": scale, "source_up": up},
+               "generator": f"cgamesh {_version()}", "version": "2.0"},
+        scenes=[{"nodes": list(range(len(surfaces)))}],
     )
     if quantize:
         doc.extensionsUsed = [QUANTIZATION]
@@ -166,9 +175,52 @@ def build_document(path, surfaces, *, up, meters_per_unit, source_units, tangent
         fills.append(fill)
         offset += layout.nbytes
         doc.materials.append(_material(mesh, material))
-        doc.meshes.append(g.Mesh(name=mesh.name, primitives=[_primitive(doc, i, layout)]))
+        doc.meshes.append({"primitives": [_primitive(i, layout)], "name": mesh.name})
         doc.nodes.append(node)
     return doc, _Blob(fills, offset)
+
+
+class _Document:
+    """The glTF JSON document: its top-level arrays, filled by ``build_document``; ``to_json``
+    writes them in the key order pygltflib writes, leaving out what it leaves out (see
+    ``_without_empty``)."""
+
+    def __init__(self, asset: dict, scenes: list) -> None:
+        self.asset = asset
+        self.scenes = scenes
+        self.accessors: list[dict] = []
+        self.bufferViews: list[dict] = []
+        self.buffers: list[dict] = []
+        self.extensionsUsed: list[str] = []
+        self.extensionsRequired: list[str] = []
+        self.materials: list[dict] = []
+        self.meshes: list[dict] = []
+        self.nodes: list[dict] = []
+
+    def to_json(self) -> str:
+        """Compact JSON; ValueError for a NaN or an infinity."""
+        document = {"accessors": self.accessors, "asset": self.asset, "bufferViews": self.bufferViews,
+                    "buffers": self.buffers, "extensionsUsed": self.extensionsUsed,
+                    "extensionsRequired": self.extensionsRequired, "materials": self.materials,
+                    "meshes": self.meshes, "nodes": self.nodes, "scene": 0, "scenes": self.scenes}
+        return json.dumps(_without_empty(document), separators=(",", ":"), allow_nan=False, skipkeys=True)
+
+
+def _without_empty(members: dict) -> dict:
+    """``members`` without the keys whose value is None or empty (a list, a string, an object),
+    recursively through objects and arrays of objects: the members a glTF document omits. As
+    pygltflib's serialiser does (so files stay byte for byte those it wrote), an object emptied
+    by this is kept."""
+    for key, value in list(members.items()):
+        if value is None or (hasattr(value, "__iter__") and len(value) == 0):
+            del members[key]
+        elif isinstance(value, dict) and key != "extensions":
+            _without_empty(value)
+        elif isinstance(value, list):
+            for item in value:
+                if isinstance(item, dict):
+                    _without_empty(item)
+    return members
 
 
 @dataclass(frozen=True)
@@ -184,11 +236,11 @@ class _Attribute:
 
     @property
     def type(self) -> str:
-        return {1: g.SCALAR, 2: g.VEC2, 3: g.VEC3, 4: g.VEC4}[self.width]
+        return _TYPES[self.width]
 
 
 def _float(name: str, width: int) -> _Attribute:
-    return _Attribute(name, g.FLOAT, np.dtype(np.float32), width, 4 * width)
+    return _Attribute(name, FLOAT, np.dtype(np.float32), width, 4 * width)
 
 
 class _Layout:
@@ -202,15 +254,15 @@ class _Layout:
             uvs = np.asarray(mesh.uvs)
             unit_uvs = bool(np.isfinite(uvs).all() and uvs.min(initial=0.0) >= 0.0 and uvs.max(initial=0.0) <= 1.0)
             attributes = [
-                _Attribute("POSITION", g.SHORT, np.dtype(np.int16), 3, 8, True),
-                _Attribute("NORMAL", g.BYTE, np.dtype(np.int8), 3, 4, True),
+                _Attribute("POSITION", SHORT, np.dtype(np.int16), 3, 8, True),
+                _Attribute("NORMAL", BYTE, np.dtype(np.int8), 3, 4, True),
             ]
             if tangents:
-                attributes.append(_Attribute("TANGENT", g.BYTE, np.dtype(np.int8), 4, 4, True))
-            attributes.append(_Attribute("TEXCOORD_0", g.UNSIGNED_SHORT, np.dtype(np.uint16), 2, 4, True)
+                attributes.append(_Attribute("TANGENT", BYTE, np.dtype(np.int8), 4, 4, True))
+            attributes.append(_Attribute("TEXCOORD_0", UNSIGNED_SHORT, np.dtype(np.uint16), 2, 4, True)
                               if unit_uvs else _float("TEXCOORD_0", 2))
             if mesh.colors is not None:
-                attributes.append(_Attribute("COLOR_0", g.UNSIGNED_SHORT, np.dtype(np.uint16), 3, 8, True))
+                attributes.append(_Attribute("COLOR_0", UNSIGNED_SHORT, np.dtype(np.uint16), 3, 8, True))
         else:
             attributes = [_float("POSITION", 3), _float("NORMAL", 3)]
             if tangents:
@@ -224,7 +276,7 @@ class _Layout:
         self.attributes = attributes
         # 65535 is the primitive-restart value for UNSIGNED_SHORT and must not be an index.
         self.index_dtype = np.dtype(np.uint16 if v <= 65535 else np.uint32)
-        self.index_component = g.UNSIGNED_SHORT if self.index_dtype == np.uint16 else g.UNSIGNED_INT
+        self.index_component = UNSIGNED_SHORT if self.index_dtype == np.uint16 else UNSIGNED_INT
         self.index_bytes = 3 * self.triangle_count * self.index_dtype.itemsize
         # exact byte lengths, and the same padded to 4 bytes: attributes, then indices
         self.lengths = [a.stride * v for a in attributes] + [self.index_bytes]
@@ -266,10 +318,10 @@ def _describe_mesh(doc, offset, mesh, layout, up, scale, path):
     views = {}
     names = [a.name for a in layout.attributes] + ["indices"]
     for name, attribute, nbytes, padded in zip(names, layout.attributes + [None], layout.lengths, layout.views):
-        view = g.BufferView(buffer=0, byteOffset=offset, byteLength=nbytes,
-                            target=g.ELEMENT_ARRAY_BUFFER if attribute is None else g.ARRAY_BUFFER)
+        view = {"buffer": 0, "byteOffset": offset, "byteLength": nbytes, "byteStride": None,
+                "target": ELEMENT_ARRAY_BUFFER if attribute is None else ARRAY_BUFFER}
         if attribute is not None and layout.quantize and attribute.stride != attribute.dtype.itemsize * attribute.width:
-            view.byteStride = attribute.stride
+            view["byteStride"] = attribute.stride
         doc.bufferViews.append(view)
         views[name] = len(doc.bufferViews) - 1
         offset += padded
@@ -278,8 +330,9 @@ def _describe_mesh(doc, offset, mesh, layout, up, scale, path):
 
     def accessor(name, **bounds):
         attribute = attributes[name]
-        doc.accessors.append(g.Accessor(bufferView=views[name], componentType=attribute.component, count=v,
-                                        type=attribute.type, normalized=attribute.normalized or None, **bounds))
+        doc.accessors.append({"bufferView": views[name], "byteOffset": 0, "componentType": attribute.component,
+                              "normalized": attribute.normalized or None, "count": v, "type": attribute.type,
+                              "max": bounds.get("max"), "min": bounds.get("min")})
         accessors[name] = len(doc.accessors) - 1
 
     positions = np.asarray(mesh.positions, dtype=np.float64)
@@ -289,20 +342,20 @@ def _describe_mesh(doc, offset, mesh, layout, up, scale, path):
     centre = 0.5 * (lo + hi)
     if not (np.isfinite(centre * factor).all() and 0.5 * float(np.max(hi - lo)) * scale <= FLOAT32_MAX):
         raise ExportError(f"{where}: positions exceed float32's range after scaling by {scale}")
-    node = g.Node(name=mesh.name, mesh=len(doc.meshes), translation=(centre[perm] * factor).tolist())
+    node = {"mesh": len(doc.meshes), "translation": (centre[perm] * factor).tolist(), "scale": None, "name": mesh.name}
     position_factor = factor
     if layout.quantize:
         half = float(np.max(hi - lo)) * 0.5 * scale
         half = half if half > 0.0 else 1.0
         position_factor = factor * (32767.0 / half)
-        node.scale = [half, half, half]
+        node["scale"] = [half, half, half]
     else:
         # Lengths in the scene's units, the unit's length in metres as the node's uniform scale:
         # float32 then stores (position - centre) itself, exactly whenever that is a float32
         # number (as on the watertight union's float32 grid), not a rounding of it times 1e-6.
         position_factor = np.asarray(sign, dtype=np.float64)
         if scale != 1.0:
-            node.scale = [scale, scale, scale]
+            node["scale"] = [scale, scale, scale]
 
     def map_positions(out, rows):
         _map_axes(out, rows, perm, position_factor, shift=centre, rounding=layout.quantize)
@@ -320,9 +373,14 @@ def _describe_mesh(doc, offset, mesh, layout, up, scale, path):
     accessor("POSITION", min=bounds(pos_min), max=bounds(pos_max))
 
     # Normalise in float64 and round once: the stored vector is then as close to unit length
-    # as its type allows (the validator checks it), with the axis map applied.
-    length = normal_lengths(mesh, path)
-    normals = np.asarray(mesh.normals, dtype=np.float64)
+    # as its type allows (the validator checks it), with the axis map applied. float32 normals
+    # that are unit within float32's rounding are what this stored already (a merged mesh held
+    # as written, cgamesh.meshing.merge): they are copied as they are, which is the same bytes.
+    normals = np.asarray(mesh.normals)
+    if normals.dtype == np.float32 and not layout.quantize and normal_length_error(mesh, path) <= FLOAT32_UNIT:
+        length = None
+    else:
+        length = normal_lengths(mesh, path)
     accessor("NORMAL")
 
     tangent_rows = None
@@ -340,8 +398,8 @@ def _describe_mesh(doc, offset, mesh, layout, up, scale, path):
         accessor("COLOR_0")
     for semantic in layout.custom:
         accessor(semantic)
-    doc.accessors.append(g.Accessor(bufferView=views["indices"], componentType=layout.index_component,
-                                    count=3 * layout.triangle_count, type=g.SCALAR))
+    doc.accessors.append({"bufferView": views["indices"], "byteOffset": 0, "componentType": layout.index_component,
+                          "normalized": False, "count": 3 * layout.triangle_count, "type": "SCALAR"})
     accessors["indices"] = len(doc.accessors) - 1
     layout.accessors.update(accessors)
 
@@ -349,7 +407,7 @@ def _describe_mesh(doc, offset, mesh, layout, up, scale, path):
         if name == "POSITION":
             map_positions(out, positions[rows])
         elif name == "NORMAL":
-            _map_unit(out, normals[rows], perm, np.asarray(sign), length[rows])
+            _map_unit(out, normals[rows], perm, np.asarray(sign), None if length is None else length[rows])
         elif name == "TANGENT":
             xyz, w, tangent_length = tangent_rows
             _map_unit(out[:, :3], xyz[rows], perm, np.asarray(sign), tangent_length[rows])
@@ -444,7 +502,8 @@ def _map_axes(out, a, perm, factor, *, shift=None, divisor=None, rounding=False)
 
 
 def _map_unit(out, a, perm, sign, length) -> None:
-    """Unit vectors a / length (n, 3), axis-mapped, into float32 or normalized int8 ``out``."""
+    """Unit vectors a / length (n, 3), axis-mapped, into float32 or normalized int8 ``out``;
+    ``length`` None: float32 ``a`` stored as it is (float32 ``out`` only)."""
     if not np.issubdtype(out.dtype, np.integer):
         _map_axes(out, a, perm, sign, divisor=length)
         return
@@ -476,32 +535,28 @@ def _quantize_unit_int8(unit: np.ndarray) -> np.ndarray:
     return best.astype(np.int8)
 
 
-def _primitive(doc, index: int, layout: _Layout) -> g.Primitive:
-    """The triangle primitive of mesh ``index``, from the accessors its layout recorded."""
+def _primitive(index: int, layout: _Layout) -> dict:
+    """The triangle primitive of mesh ``index``, from the accessors its layout recorded: the
+    attributes glTF names in its order of them, then the custom ones."""
     names = {a.name: layout.accessors[a.name] for a in layout.attributes}
-    return g.Primitive(
-        attributes=g.Attributes(**names),
-        indices=layout.accessors["indices"],
-        material=index,
-        mode=g.TRIANGLES,
-    )
+    attributes = {slot: names.pop(slot, None) for slot in _ATTRIBUTE_SLOTS}
+    attributes.update(names)
+    return {"attributes": attributes, "indices": layout.accessors["indices"], "mode": TRIANGLES, "material": index}
 
 
-def _material(mesh: SurfaceMesh, material: Material) -> g.Material:
-    return g.Material(
-        name=mesh.name,
-        pbrMetallicRoughness=g.PbrMetallicRoughness(
-            baseColorFactor=[float(c) for c in material.color] + [1.0],
-            metallicFactor=float(material.metallic),
-            roughnessFactor=float(material.roughness),
-        ),
-        doubleSided=bool(mesh.double_sided),
-    )
+def _material(mesh: SurfaceMesh, material: Material) -> dict:
+    return {
+        "pbrMetallicRoughness": {"baseColorFactor": [float(c) for c in material.color] + [1.0],
+                                 "metallicFactor": float(material.metallic),
+                                 "roughnessFactor": float(material.roughness)},
+        "emissiveFactor": [0.0, 0.0, 0.0], "alphaMode": "OPAQUE", "doubleSided": bool(mesh.double_sided),
+        "name": mesh.name,
+    }
 
 
-def _json_bytes(path, doc: g.GLTF2) -> bytes:
+def _json_bytes(path, doc: _Document) -> bytes:
     try:
-        text = doc.gltf_to_json(separators=(",", ":"), indent=None)  # allow_nan=False inside
+        text = doc.to_json()
     except ValueError as exc:
         raise ExportError(f"cannot export {path}: {exc}") from exc
     return text.encode("utf-8")
