@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cgamesh.geometry.algebra.stable_rows import rows_times
+
 TRIG_DEGREE = 3
 TERMS = 2 * TRIG_DEGREE + 1
 SAMPLE_ANGLES = 2.0 * np.pi * np.arange(TERMS) / TERMS
@@ -84,7 +86,7 @@ def fit(samples: np.ndarray) -> np.ndarray:
 
 def frame_coordinates(velocity: np.ndarray, radial: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """(zeta, rho) (K, 7, 2): velocity (K, 7, 3) along the circle's normal and along e_r."""
-    zeta = np.einsum("ksi,ki->ks", velocity, normal) @ _ZETA_DEGREE_2.T
+    zeta = rows_times(np.einsum("ksi,ki->ks", velocity, normal), _ZETA_DEGREE_2.T)
     rho = np.einsum("ksi,ksi->ks", velocity, radial)
     return np.stack([zeta, rho], axis=-1)
 

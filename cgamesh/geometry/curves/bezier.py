@@ -7,6 +7,7 @@ from math import comb, lgamma
 
 import numpy as np
 
+from cgamesh.geometry.algebra.stable_rows import rows_times
 from cgamesh.geometry.curves import CurveBasis
 
 
@@ -71,8 +72,8 @@ class RationalBezier:
         w = np.asarray(self.weights, dtype=np.float64)
         w = w / w.max()  # the curve is unchanged by a common factor; 1e300 weights stay finite
         b, db = bernstein(order, t), bernstein_derivative(order, t)
-        denominator = b @ w
-        d_denominator = db @ w
+        denominator = rows_times(b, w)
+        d_denominator = rows_times(db, w)
         rational = b * w / denominator[:, None]
         # Quotient rule of eq. 32, written per basis function.
         d_rational = (db * w - rational * d_denominator[:, None]) / denominator[:, None]

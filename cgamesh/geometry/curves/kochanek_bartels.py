@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cgamesh.geometry.algebra.stable_rows import rows_times
 from cgamesh.geometry.curves import CurveBasis, split_parameter
 
 
@@ -63,7 +64,7 @@ class KochanekBartels:
         # weights of the four neighbouring controls (clamped ends repeat an index; the
         # repeated weights simply add when the basis is evaluated).
         mix = np.stack([point_start, v_start, point_end, v_end])  # (4 hermite, 4 controls)
-        return CurveBasis(self._neighbours(segment), h @ mix, dh @ mix)
+        return CurveBasis(self._neighbours(segment), rows_times(h, mix), rows_times(dh, mix))
 
 
 def catmull_rom(control_count: int, closed: bool = False) -> KochanekBartels:
