@@ -24,16 +24,15 @@ from cgamesh.geometry.algebra import rotors
 from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
 from cgamesh.geometry.algebra.layout import grade_indices
 from cgamesh.geometry.algebra import products
-from cgamesh.geometry.flatness import carrier_part
 from cgamesh.geometry.objects import circle_euclidean
-from cgamesh.geometry.projection import margin, project, project_blades
-from cgamesh.geometry.surface import MIN_MARGIN, SCAN_SAMPLES_PER_SEGMENT
+from cgamesh.geometry.projection import project
+from cgamesh.geometry.surface import MIN_MARGIN
 from cgamesh.meshing import normals as normal_field
-from cgamesh.meshing import uv as uv_map
 from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION,
                                      OUTWARD_TRUST, STATIONARY_FRACTION, STATIONARY_OFFSET, _grid_weld, _wound_grid,
                                      drop_zero_area, frame_values)
 from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.meshing.scene_batch.projection_scan import surely_projectable
 
 _VECTORS = grade_indices(1)
 # An outward estimate or sum this close (relative) to its decision threshold is recomputed the
@@ -61,24 +60,6 @@ class _Rows:
     def evaluate(self) -> tuple[np.ndarray, np.ndarray]:
         picked = self.flat[self.indices]
         return np.einsum("ak,akm->am", self.weights, picked), np.einsum("ak,akm->am", self.derivatives, picked)
-
-
-def _scan_ok(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarray:
-    """(S,) EvolvedSurface.check_projection_exists(sampled=t) would pass without refining: every
-    margin of its scan at least MIN_MARGIN and no orientation flip of the carrier between samples
-    (a flip is refined by the per-surface path, which raises or finds no line)."""
-    count = len(controls)
-    segments = curve.segment_count
-    step = 1.0 / SCAN_SAMPLES_PER_SEGMENT
-    if not (len(t) > 1 and np.max(np.diff(t)) <= step):
-        t = np.linspace(0.0, segments, SCAN_SAMPLES_PER_SEGMENT * segments + 1)
-    rows = _Rows(curve, t, controls)
-    values = rows.value()
-    margins = margin(values, 3, rows.size).reshape(count, -1)
-    ok = np.all(margins >= MIN_MARGIN, axis=1)
-    m = carrier_part(project_blades(values, 3), 3).reshape(count, len(t), 3)
-    signed = np.einsum("sac,sac->sa", m[:, :-1], m[:, 1:])
-    return ok & np.all(signed > 0.0, axis=1)
 
 
 def _transported_frames(normal: np.ndarray, closed: bool, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -186,7 +167,7 @@ def mesh_blade_circles(names, controls: np.ndarray, origin: np.ndarray, scale: n
     scale (S,)), or None for a surface left to the per-surface mesher (module doc)."""
     count = len(controls)
     t = np.linspace(0.0, curve.segment_count, along)
-    ok = _scan_ok(curve, t, controls)
+    ok = surely_projectable(curve, t, controls)
 
     rows = _Rows(curve, t, controls)
     interpolant, derivative = rows.evaluate()
