@@ -196,3 +196,44 @@ _VANISHING_SAMPLE = 'cgamesh: 1\nsurfaces:\n  - name: s0\n    type: circles\n   
 def test_random_scenes_mesh_the_same_batched_or_are_refused_alike(text, tangents):
     scene = parse_scene(text, "random.yaml")
     assert_alike(*mesh_both(scene, tangents=tangents))
+
+
+@PROPERTY
+@given(text=scenes())
+def test_the_quick_projection_scan_passes_only_what_the_exact_scan_passes(text):
+    """projection_scan.surely_projectable from the controls' products: a surface it passes is one
+    whose exact scan (EvolvedSurface.check_projection_exists on its rings) raises nothing."""
+    from cgamesh.geometry.construction import build_surface
+    from cgamesh.meshing.scene_batch.controls import build_blade_controls
+    from cgamesh.meshing.scene_batch.projection_scan import surely_projectable
+
+    scene = parse_scene(text, "random.yaml")
+    for spec in scene.surfaces:
+        built = build_blade_controls([spec], len(spec.controls))
+        if not built.ok[0]:
+            continue
+        surface = build_surface(spec)
+        t = np.linspace(0.0, surface.segment_count, spec.along)
+        if surely_projectable(surface.curve, t, built.controls)[0]:
+            surface.check_projection_exists(sampled=t)  # raises if the exact scan refuses it
+
+
+def test_a_carrier_that_flips_between_samples_is_left_to_the_exact_scan():
+    """Two circles nearly in one plane: the carrier part flips between scan samples, which only
+    the per-surface scan's refinement tells from a line (here it is none, and the tube meshes)."""
+    text = ("cgamesh: 1\nsurfaces:\n  - name: nearly_flat\n    type: circles\n    curve: linear\n"
+            "    resolution: {around: 8, along: 9}\n"
+            "    controls:\n      - {center: [0, 0, 0], normal: [0, 0, 1], radius: 1}\n"
+            "      - {center: [3, 0, 0.5], normal: [0, 0.2, 1], radius: 1.5}\n")
+    from cgamesh.geometry.construction import make_curve
+    from cgamesh.meshing.scene_batch.controls import build_blade_controls
+    from cgamesh.meshing.scene_batch.projection_scan import surely_projectable
+
+    scene = parse_scene(text, "flip.yaml")
+    spec = scene.surfaces[0]
+    built = build_blade_controls([spec], 2)
+    assert built.ok[0] and not surely_projectable(make_curve(spec), np.linspace(0.0, 1.0, 9), built.controls)[0]
+    assert batched_count(scene) == 0
+    alone, batched = mesh_both(scene)
+    assert not isinstance(alone, Exception)
+    assert_same_meshes(alone, batched)
