@@ -237,3 +237,12 @@ def test_a_carrier_that_flips_between_samples_is_left_to_the_exact_scan():
     alone, batched = mesh_both(scene)
     assert not isinstance(alone, Exception)
     assert_same_meshes(alone, batched)
+
+
+def test_the_benchmark_runs_at_a_small_size_and_finds_the_meshes_identical(capsys):
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    import bench_scene_batch
+
+    assert bench_scene_batch.main(["--surfaces", "12", "--controls", "3"]) == 0
+    out = capsys.readouterr().out
+    assert "meshes identical" in out and "of 12 surfaces batched" in out
