@@ -6,7 +6,7 @@ which meshes each surface alone. Checked on every example scene (its own resolut
 --around / --along overrides, with and without tangents), on scenes of random tubes (the
 benchmark's, whose low vertex counts around put nearly every ring on the fold path), and on
 random scenes of several surfaces sharing and not sharing a shape of work (every curve kind,
-open and closed, aligned or not, orientations on the exact axes, sizes from 1e-3 to 1e3, far
+open and closed, with caps or not, aligned or not, orientations on the exact axes, sizes from 1e-3 to 1e3, far
 from the origin, through circles, repeated controls). Where the per-surface path refuses a scene,
 the batched path refuses it with the same message.
 """
@@ -94,6 +94,7 @@ def test_the_examples_blade_circles_go_through_the_batched_pass():
     # every fixed-resolution blade circle surface without caps among the examples
     assert taken["fig08_cubic"] == taken["fig08_linear"] == taken["fig08_quadratic"] == 1
     assert taken["fig14_bezier_orders"] == 4 and taken["closed_loop"] == 1
+    assert taken["kb_tube"] == taken["rational_tube"] == 1  # with caps
     assert taken["fig10_cubic_pairs"] == taken["motor_tube"] == 0  # ribbons and motors: per surface
 
 
@@ -170,8 +171,9 @@ def surfaces(draw, shape, name):
         lines.insert(1, lines[0])
     kb = f"    tension: {tbc[0]}\n    bias: {tbc[1]}\n    continuity: {tbc[2]}\n" if tbc else ""
     align = draw(st.sampled_from(("true", "true", "false")))
+    caps = not closed and draw(st.booleans())
     return (f"  - name: {name}\n    type: circles\n    curve: {curve}\n{kb}"
-            f"    closed: {str(closed).lower()}\n    align: {align}\n"
+            f"    closed: {str(closed).lower()}\n    align: {align}\n    caps: {str(caps).lower()}\n"
             f"    resolution: {{around: {around}, along: {along}}}\n    controls:\n"
             + "".join(f"      - {line}\n" for line in lines))
 

@@ -9,9 +9,10 @@ mesher, so every mesh is that mesher's, bit for bit.
 
 Covered: ``type: circles`` with ``interpolation: blade``, every curve kind (linear, bezier,
 rational_bezier, kb, catmull_rom; open or closed), a fixed resolution (the file's or
---around/--along), with or without tangents, every uv mode (applied afterwards, as for any
-mesh). Left to the per-surface path: point-pair ribbons, motor interpolation, tolerance
-meshing, caps, and single surfaces needing a rare repair (see ``circle_grid``).
+--around/--along), with or without tangents, with or without caps, every uv mode (applied
+afterwards, as for any mesh). Left to the per-surface path: point-pair ribbons, motor
+interpolation, tolerance meshing, and single surfaces needing a rare repair (see
+``circle_grid``).
 """
 
 from cgamesh.meshing.scene_batch.scene import BatchedScene

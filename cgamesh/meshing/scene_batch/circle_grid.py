@@ -18,6 +18,8 @@ and the caller meshes it alone.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from cgamesh.geometry.algebra import rotors
@@ -30,7 +32,7 @@ from cgamesh.geometry.surface import MIN_MARGIN
 from cgamesh.meshing import normals as normal_field
 from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION,
                                      OUTWARD_TRUST, STATIONARY_FRACTION, STATIONARY_OFFSET, _grid_weld, _wound_grid,
-                                     drop_zero_area, frame_values)
+                                     _add_cap, drop_zero_area, frame_values)
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.scene_batch.projection_scan import surely_projectable
 
@@ -38,6 +40,15 @@ _VECTORS = grade_indices(1)
 # An outward estimate or sum this close (relative) to its decision threshold is recomputed the
 # per-surface way, whose summation order may differ from the batched one in the last bits.
 _DECISION_MARGIN = 1e-9
+
+
+@dataclass(frozen=True)
+class _SurfaceRings:
+    """One surface's rings (K, 3), (K, 3), (K,) as circles._add_cap reads them."""
+
+    centre: np.ndarray
+    normal: np.ndarray
+    radius: np.ndarray
 
 
 class _Rows:
@@ -161,11 +172,14 @@ def _unit_normals(raw, theta, speed):
 
 
 def mesh_blade_circles(names, controls: np.ndarray, origin: np.ndarray, scale: np.ndarray, curve, closed: bool,
-                       around: int, along: int, tangents: bool) -> list[SurfaceMesh | None]:
-    """The meshes of ``mesh_circle_surface(surface, around, along, closed=closed, with_tangents=tangents,
-    distinct=True)`` for S surfaces of one group (controls (S, n, 32) in frames origin (S, 3),
-    scale (S,)), or None for a surface left to the per-surface mesher (module doc)."""
+                       around: int, along: int, tangents: bool, caps: np.ndarray | None = None
+                       ) -> list[SurfaceMesh | None]:
+    """The meshes of ``mesh_circle_surface(surface, around, along, caps=caps, closed=closed,
+    with_tangents=tangents, distinct=True)`` for S surfaces of one group (controls (S, n, 32) in
+    frames origin (S, 3), scale (S,); caps (S,) bool or None for none), or None for a surface left
+    to the per-surface mesher (module doc)."""
     count = len(controls)
+    caps = np.zeros(count, dtype=bool) if caps is None else caps
     t = np.linspace(0.0, curve.segment_count, along)
     ok = surely_projectable(curve, t, controls)
 
@@ -193,11 +207,9 @@ def mesh_blade_circles(names, controls: np.ndarray, origin: np.ndarray, scale: n
             rows_array[bad] = rows_array[donor]
         controls, origin, scale = controls.copy(), origin.copy(), scale.copy()
         controls[unfit], origin[unfit], scale[unfit] = controls[fit[0]], origin[fit[0]], scale[fit[0]]
-    keep = np.arange(count)
-    kept = count
-    by_surface = (kept, along)
+    by_surface = (count, along)
     fine = ok & _distinct(centre.reshape(by_surface + (3,)), normal.reshape(by_surface + (3,)),
-                     radius.reshape(by_surface), scale)
+                          radius.reshape(by_surface), scale)
 
     u, v = _transported_frames(normal.reshape(by_surface + (3,)), closed, t)
     u, v = u.reshape(-1, 3), v.reshape(-1, 3)
@@ -219,12 +231,12 @@ def mesh_blade_circles(names, controls: np.ndarray, origin: np.ndarray, scale: n
     agreement = np.einsum("ksc,ksc->k", np.ascontiguousarray(unit_samples[:, :-1]).reshape((-1,) + sampled.shape[1:]),
                           np.ascontiguousarray(unit_samples[:, 1:]).reshape((-1,) + sampled.shape[1:])
                           ) / sampled.shape[1]
-    vertex_signs = np.ones((kept * along, columns))
+    vertex_signs = np.ones((count * along, columns))
     if np.any(suspicious):
         fine &= _fold_signs(curve, controls, origin, scale, t, u, frame, speed, theta, suspicious, along,
                             vertex_signs, agreement)
-    folds = (agreement < -FOLD_AGREEMENT).reshape(kept, along - 1)
-    parity = np.concatenate([np.zeros((kept, 1), dtype=np.int64), np.cumsum(folds, axis=1)], axis=1) % 2
+    folds = (agreement < -FOLD_AGREEMENT).reshape(count, along - 1)
+    parity = np.concatenate([np.zeros((count, 1), dtype=np.int64), np.cumsum(folds, axis=1)], axis=1) % 2
     signs = vertex_signs.reshape(by_surface + (columns,)) * (1.0 - 2.0 * parity)[..., None]
     turning = suspicious.reshape(by_surface)
     per_vertex = turning.any(axis=1)  # these take the sum over every vertex (one sign per vertex)
@@ -246,7 +258,7 @@ def mesh_blade_circles(names, controls: np.ndarray, origin: np.ndarray, scale: n
     if not trusted.all():
         shape = by_surface + (columns,)
         every = np.einsum("kmi,kmi->km", normals, positions - centre[:, None, :]).reshape(shape) * signs
-        totals = every.reshape(kept, -1).sum(axis=1)
+        totals = every.reshape(count, -1).sum(axis=1)
         outward = np.where(trusted, estimate, totals)
     fine &= ~(np.abs(outward) <= _DECISION_MARGIN * threshold)
     signs = np.where(outward[:, None, None] < 0.0, -signs, signs)
@@ -273,7 +285,7 @@ def mesh_blade_circles(names, controls: np.ndarray, origin: np.ndarray, scale: n
     # UVs: arc length along each surface's rings (uv.along_lengths, normalised, mean_along)
     samples = points.reshape(by_surface + points.shape[1:])
     steps = np.linalg.norm(np.diff(samples, axis=1), axis=-1).mean(axis=-1)
-    travelled = np.concatenate([np.zeros((kept, 1)), np.cumsum(steps, axis=1)], axis=1)
+    travelled = np.concatenate([np.zeros((count, 1)), np.cumsum(steps, axis=1)], axis=1)
     length = travelled[:, -1]
     moving = length > 0.0
     v_coordinate = np.where(moving[:, None], travelled / np.where(moving, length, 1.0)[:, None],
@@ -288,27 +300,33 @@ def mesh_blade_circles(names, controls: np.ndarray, origin: np.ndarray, scale: n
 
     faces = _grid_faces(signs, along, columns)
     if np.any(turning):
-        _orient_strips(faces, positions.reshape(kept, -1, 3), normals.reshape(kept, -1, 3), turning, around)
+        _orient_strips(faces, positions.reshape(count, -1, 3), normals.reshape(count, -1, 3), turning, around)
     weld = _grid_weld(along, around, closed)
     vertex_count = along * columns
     near_ring = near_zero[0] // along if near_zero[0].size else np.empty(0, np.intp)
-    for index, s in enumerate(keep):
-        if not fine[index]:
-            continue
-        flat_positions = positions[index].reshape(-1, 3)
-        mine = near_ring == index
-        surface_faces = faces[index]
+    ring_shape = by_surface + (3,)
+    for s in np.flatnonzero(fine):
+        flat_positions = positions[s].reshape(-1, 3)
+        mine = near_ring == s
+        surface_faces = faces[s]
         if np.any(mine):
-            ring = near_zero[0][mine] - index * along
+            ring = near_zero[0][mine] - s * along
             surface_faces = drop_zero_area(flat_positions, surface_faces, ring * columns + near_zero[1][mine])
-        circumference_s = float(circumference[index])
-        results[s] = SurfaceMesh(
-            name=names[s], positions=flat_positions, normals=normals[index].reshape(-1, 3),
-            uvs=uvs[index].reshape(-1, 2), faces=surface_faces,
-            tangents=None if tangent_grid is None else tangent_grid[index].reshape(-1, 4),
-            uv_lengths=np.broadcast_to([circumference_s, float(length[index]) if moving[index] else circumference_s],
-                                       (vertex_count, 2)),
-            weld=weld.copy())
+        girth_s = float(circumference[s])
+        parts = [flat_positions, normals[s].reshape(-1, 3), uvs[s].reshape(-1, 2), surface_faces,
+                 None if tangent_grid is None else tangent_grid[s].reshape(-1, 4),
+                 np.broadcast_to([girth_s, float(length[s]) if moving[s] else girth_s], (vertex_count, 2)),
+                 weld.copy()]
+        if caps[s]:  # the per-surface mesher's discs, on this surface's rings
+            rings = _SurfaceRings(centre.reshape(ring_shape)[s], normal.reshape(ring_shape)[s], ring_radius[s])
+            surface_u = u.reshape(ring_shape)[s]
+            leaving = np.sign(frame[[s * along, s * along + along - 1], 0, 0]) * np.array([-1.0, 1.0])
+            leaving[leaving == 0.0] = np.array([-1.0, 1.0])[leaving == 0.0]
+            for ring, facing in zip((0, along - 1), leaving):
+                parts = _add_cap(*parts, rings, surface_u, ring, columns, around, theta[:-1], facing)
+        flat_positions, flat_normals, flat_uvs, surface_faces, flat_tangents, lengths, surface_weld = parts
+        results[s] = SurfaceMesh(name=names[s], positions=flat_positions, normals=flat_normals, uvs=flat_uvs,
+                                 faces=surface_faces, tangents=flat_tangents, uv_lengths=lengths, weld=surface_weld)
     return results
 
 

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import numpy as np
+
 from cgamesh.errors import CgameshError
 from cgamesh.geometry.construction import make_curve
 from cgamesh.meshing.mesh import SurfaceMesh
@@ -27,7 +29,7 @@ CHUNK_RINGS = 1024
 
 def group_key(spec, around: int | None, along: int | None, tolerance: float | None):
     """The shape of work of a surface, or None when the batched pass does not cover it."""
-    if (spec.type != "circles" or spec.interpolation != "blade" or tolerance is not None or spec.caps
+    if (spec.type != "circles" or spec.interpolation != "blade" or tolerance is not None
             or around is None or along is None or around < 3 or along < 2):
         return None
     try:
@@ -84,8 +86,9 @@ class BatchedScene:
             ok = chunk.built.ok
             chosen = [i for i, good in zip(chunk.indices, ok) if good]
             names = [spec.name for spec, good in zip(chunk.specs, ok) if good]
+            caps = np.array([spec.caps for spec, good in zip(chunk.specs, ok) if good])
             meshed = mesh_blade_circles(names, chunk.built.controls[ok], chunk.built.origin[ok],
-                                        chunk.built.scale[ok], curve, closed, around, along, self._tangents)
+                                        chunk.built.scale[ok], curve, closed, around, along, self._tangents, caps)
             chunk.meshes = dict(zip(chosen, meshed))
             chunk.built = None  # the controls are no longer needed
         return chunk.meshes.pop(index)
