@@ -6,9 +6,9 @@ which meshes each surface alone. Checked on every example scene (its own resolut
 --around / --along overrides, with and without tangents), on scenes of random tubes (the
 benchmark's, whose low vertex counts around put nearly every ring on the fold path), and on
 random scenes of several surfaces sharing and not sharing a shape of work (every curve kind,
-open and closed, with caps or not, aligned or not, orientations on the exact axes, sizes from 1e-3 to 1e3, far
-from the origin, through circles, repeated controls). Where the per-surface path refuses a scene,
-the batched path refuses it with the same message.
+blade and motor interpolation, open and closed, with caps or not, aligned or not, orientations on
+the exact axes, sizes from 1e-3 to 1e3, far from the origin, through circles, repeated controls).
+Where the per-surface path refuses a scene, the batched path refuses it with the same message.
 """
 
 from __future__ import annotations
@@ -95,19 +95,23 @@ def test_the_examples_blade_circles_go_through_the_batched_pass():
     assert taken["fig08_cubic"] == taken["fig08_linear"] == taken["fig08_quadratic"] == 1
     assert taken["fig14_bezier_orders"] == 4 and taken["closed_loop"] == 1
     assert taken["kb_tube"] == taken["rational_tube"] == 1  # with caps
-    assert taken["fig10_cubic_pairs"] == taken["motor_tube"] == 0  # ribbons and motors: per surface
+    assert taken["motor_tube"] == 2  # motor interpolation
+    assert taken["fig10_cubic_pairs"] == taken["ribbon_loop"] == 0  # ribbons: per surface
 
 
-def random_tube_scene(count: int, controls: int):
+def random_tube_scene(count: int, controls: int, interpolation: str = "blade"):
     sys.path.insert(0, str(ROOT / "benchmarks"))
     from bench_scene_reader import flow_style, scene_document
 
-    return parse_scene(flow_style(scene_document(count, controls)), "tubes.yaml")
+    text = flow_style(scene_document(count, controls))
+    text = text.replace("    type: circles\n", f"    type: circles\n    interpolation: {interpolation}\n")
+    return parse_scene(text, "tubes.yaml")
 
 
 @pytest.mark.parametrize("controls", [2, 4])
-def test_random_tubes_mesh_the_same_batched_and_nearly_all_are_batched(controls):
-    scene = random_tube_scene(60, controls)
+@pytest.mark.parametrize("interpolation", ["blade", "motor"])
+def test_random_tubes_mesh_the_same_batched_and_nearly_all_are_batched(controls, interpolation):
+    scene = random_tube_scene(60, controls, interpolation)
     for tangents in (False, True):
         alone, batched = mesh_both(scene, tangents=tangents)
         assert_same_meshes(alone, batched)
@@ -135,19 +139,21 @@ direction = st.one_of(st.sampled_from(AXES), sphere_direction)
 
 @st.composite
 def shapes(draw):
-    """A shape of work: curve kind and its parameters, closed, control count, around, along."""
+    """A shape of work: curve kind and its parameters, closed, control count, around, along,
+    interpolation."""
     curve = draw(st.sampled_from(("linear", "bezier", "rational_bezier", "kb", "catmull_rom")))
     closed = curve in ("kb", "catmull_rom") and draw(st.booleans())
     count = draw(st.integers(3 if closed else 2, 5))
     tbc = tuple(draw(st.sampled_from((0.0, 0.5, -1.0, 1.0))) for _ in range(3)) if curve == "kb" else None
     around = draw(st.sampled_from((3, 4, 8, 16)))
     along = draw(st.sampled_from((2, 3, 9, 40)))
-    return curve, closed, count, tbc, around, along
+    interpolation = draw(st.sampled_from(("blade", "blade", "motor")))
+    return curve, closed, count, tbc, around, along, interpolation
 
 
 @st.composite
 def surfaces(draw, shape, name):
-    curve, closed, count, tbc, around, along = shape
+    curve, closed, count, tbc, around, along, interpolation = shape
     scale = 10.0 ** draw(st.integers(-3, 3))
     offset = np.array(draw(st.tuples(coordinate, coordinate, coordinate))) * 10.0 ** draw(st.integers(0, 4))
     step = np.array(draw(direction))
@@ -172,7 +178,7 @@ def surfaces(draw, shape, name):
     kb = f"    tension: {tbc[0]}\n    bias: {tbc[1]}\n    continuity: {tbc[2]}\n" if tbc else ""
     align = draw(st.sampled_from(("true", "true", "false")))
     caps = not closed and draw(st.booleans())
-    return (f"  - name: {name}\n    type: circles\n    curve: {curve}\n{kb}"
+    return (f"  - name: {name}\n    type: circles\n    interpolation: {interpolation}\n    curve: {curve}\n{kb}"
             f"    closed: {str(closed).lower()}\n    align: {align}\n    caps: {str(caps).lower()}\n"
             f"    resolution: {{around: {around}, along: {along}}}\n    controls:\n"
             + "".join(f"      - {line}\n" for line in lines))
@@ -180,7 +186,7 @@ def surfaces(draw, shape, name):
 
 @st.composite
 def scenes(draw):
-    """Scenes of 2 to 6 blade circle surfaces, most sharing one shape of work."""
+    """Scenes of 2 to 6 circle surfaces, most sharing one shape of work."""
     common = draw(shapes())
     count = draw(st.integers(2, 6))
     bodies = [draw(surfaces(common if draw(st.integers(0, 3)) else draw(shapes()), f"s{i}")) for i in range(count)]
@@ -211,6 +217,8 @@ def test_the_quick_projection_scan_passes_only_what_the_exact_scan_passes(text):
 
     scene = parse_scene(text, "random.yaml")
     for spec in scene.surfaces:
+        if spec.interpolation != "blade":
+            continue
         built = build_blade_controls([spec], len(spec.controls))
         if not built.ok[0]:
             continue
@@ -248,3 +256,9 @@ def test_the_benchmark_runs_at_a_small_size_and_finds_the_meshes_identical(capsy
     assert bench_scene_batch.main(["--surfaces", "12", "--controls", "3"]) == 0
     out = capsys.readouterr().out
     assert "meshes identical" in out and "of 12 surfaces batched" in out
+
+
+def test_a_large_surface_is_meshed_alone_as_before():
+    scene = load_scene(ROOT / "examples" / "kb_tube.yaml", rendering=False)
+    assert batched_count(scene, Resolution(256, 256)) == 0  # 257 x 256 vertices: over CHUNK_VERTICES
+    assert batched_count(scene, Resolution(64, 256)) == 1

@@ -27,14 +27,11 @@ from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
 from cgamesh.geometry.algebra.layout import grade_indices
 from cgamesh.geometry.algebra import products
 from cgamesh.geometry.objects import circle_euclidean
-from cgamesh.geometry.projection import project
-from cgamesh.geometry.surface import MIN_MARGIN
 from cgamesh.meshing import normals as normal_field
 from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION,
                                      OUTWARD_TRUST, STATIONARY_FRACTION, STATIONARY_OFFSET, _grid_weld, _wound_grid,
                                      _add_cap, drop_zero_area, frame_values)
 from cgamesh.meshing.mesh import SurfaceMesh
-from cgamesh.meshing.scene_batch.projection_scan import surely_projectable
 
 _VECTORS = grade_indices(1)
 # An outward estimate or sum this close (relative) to its decision threshold is recomputed the
@@ -49,28 +46,6 @@ class _SurfaceRings:
     centre: np.ndarray
     normal: np.ndarray
     radius: np.ndarray
-
-
-class _Rows:
-    """A group's curve basis at parameters t (A,), evaluated for every surface: S A rows."""
-
-    def __init__(self, curve, t: np.ndarray, controls: np.ndarray):
-        count, n, _ = controls.shape
-        basis = curve.basis(t)
-        a = len(t)
-        offsets = (np.arange(count) * n)[:, None, None]
-        self.indices = (basis.indices[None] + offsets).reshape(count * a, -1)
-        self.weights = np.broadcast_to(basis.weights, (count,) + basis.weights.shape).reshape(count * a, -1)
-        self.derivatives = np.broadcast_to(basis.derivatives, (count,) + basis.weights.shape).reshape(count * a, -1)
-        self.size = np.tile(basis.weight_sum(), count)
-        self.flat = controls.reshape(count * n, 32)
-
-    def value(self) -> np.ndarray:
-        return np.einsum("ak,akm->am", self.weights, self.flat[self.indices])
-
-    def evaluate(self) -> tuple[np.ndarray, np.ndarray]:
-        picked = self.flat[self.indices]
-        return np.einsum("ak,akm->am", self.weights, picked), np.einsum("ak,akm->am", self.derivatives, picked)
 
 
 def _transported_frames(normal: np.ndarray, closed: bool, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -120,33 +95,28 @@ def _ring_fields(centre, normal, radius, omega, u, v, row_origin, row_scale):
     return points, radial, velocity, sampled, speed, normal_field.fit(zeta_rho), normal_field.fit(sampled)
 
 
-def _circles_at(projection, row_origin, row_scale):
+def _circles_at(blades, derivatives, row_origin, row_scale):
     """CircleRings.from_projection, each row in its own surface's frame: centre, normal, radius, omega."""
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        local_centre, normal, local_radius = circle_euclidean(projection.blades)
+        local_centre, normal, local_radius = circle_euclidean(blades)
         centre = row_origin + row_scale[:, None] * local_centre
         radius = row_scale * local_radius
-        omega = products.geometric(projection.blades, projection.derivatives, (3,), (3,), (2,))
+        omega = products.geometric(blades, derivatives, (3,), (3,), (2,))
     return centre, normal, radius, omega
 
 
-def _nearby_frames(curve, controls, surface, t, u, origin, scale):
+def _nearby_frames(sampler, surface, t, u, origin, scale):
     """circles._nearby_normals for rows of many surfaces: the (zeta, rho) fits (R, 7, 2) of the rings
     of ``surface`` (R,) at parameters t (R,), their phase carried from axes u (R, 3); and (R,)
-    whether the projection exists there (the per-surface sample refuses it otherwise)."""
-    n = controls.shape[1]
-    basis = curve.basis(t)
-    picked = controls.reshape(-1, 32)[basis.indices + (surface * n)[:, None]]
-    interpolant = np.einsum("ak,akm->am", basis.weights, picked)
-    derivative = np.einsum("ak,akm->am", basis.derivatives, picked)
+    whether they have a circle there (the per-surface sample refuses it otherwise)."""
+    blades, derivatives, exists = sampler.at(surface, t)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        projection = project(interpolant, derivative, 3, basis.weight_sum())
         row_origin, row_scale = origin[surface], scale[surface]
-        centre, normal, radius, omega = _circles_at(projection, row_origin, row_scale)
+        centre, normal, radius, omega = _circles_at(blades, derivatives, row_origin, row_scale)
         u = u - np.einsum("ki,ki->k", u, normal)[:, None] * normal
         u /= np.linalg.norm(u, axis=1, keepdims=True)
         fields = _ring_fields(centre, normal, radius, omega, u, np.cross(normal, u), row_origin, row_scale)
-    return fields[5], projection.margin >= MIN_MARGIN
+    return fields[5], exists
 
 
 def _distinct(centre, normal, radius, scale) -> np.ndarray:
@@ -171,25 +141,21 @@ def _unit_normals(raw, theta, speed):
             (np.concatenate([near[0], tail[2][0] + cut]), np.concatenate([near[1], tail[2][1]])))
 
 
-def mesh_blade_circles(names, controls: np.ndarray, origin: np.ndarray, scale: np.ndarray, curve, closed: bool,
-                       around: int, along: int, tangents: bool, caps: np.ndarray | None = None
-                       ) -> list[SurfaceMesh | None]:
+def mesh_circle_group(names, sampler, origin: np.ndarray, scale: np.ndarray, closed: bool, around: int,
+                      along: int, tangents: bool, caps: np.ndarray | None = None) -> list[SurfaceMesh | None]:
     """The meshes of ``mesh_circle_surface(surface, around, along, caps=caps, closed=closed,
-    with_tangents=tangents, distinct=True)`` for S surfaces of one group (controls (S, n, 32) in
-    frames origin (S, 3), scale (S,); caps (S,) bool or None for none), or None for a surface left
-    to the per-surface mesher (module doc)."""
-    count = len(controls)
+    with_tangents=tangents, distinct=True)`` for the S surfaces of one group (``sampler``, see
+    samplers.py; their frames origin (S, 3), scale (S,); caps (S,) bool or None for none), or None
+    for a surface left to the per-surface mesher (module doc)."""
+    count = len(origin)
     caps = np.zeros(count, dtype=bool) if caps is None else caps
-    t = np.linspace(0.0, curve.segment_count, along)
-    ok = surely_projectable(curve, t, controls)
-
-    rows = _Rows(curve, t, controls)
-    interpolant, derivative = rows.evaluate()
-    projection = project(interpolant, derivative, 3, rows.size)
-    ok &= np.all((projection.margin >= MIN_MARGIN).reshape(count, along), axis=1)
+    t = np.linspace(0.0, sampler.segment_count, along)
+    ok = sampler.scan_ok(t)
+    blades, derivatives, exists = sampler.at(np.repeat(np.arange(count), along), np.tile(t, count))
+    ok &= np.all(exists.reshape(count, along), axis=1)
     row_origin = np.repeat(origin, along, axis=0)
     row_scale = np.repeat(scale, along)
-    centre, normal, radius, omega = _circles_at(projection, row_origin, row_scale)
+    centre, normal, radius, omega = _circles_at(blades, derivatives, row_origin, row_scale)
     ok &= (np.isfinite(centre).all(axis=1) & np.isfinite(radius) & np.isfinite(normal).all(axis=1)).reshape(
         count, along).all(axis=1)
     # Rows of surfaces found unfit are overwritten by a fit surface's (in place: every array keeps
@@ -205,8 +171,6 @@ def mesh_blade_circles(names, controls: np.ndarray, origin: np.ndarray, scale: n
         donor = np.tile(fit[0] * along + np.arange(along), unfit.size)
         for rows_array in (centre, normal, radius, omega, row_origin, row_scale):
             rows_array[bad] = rows_array[donor]
-        controls, origin, scale = controls.copy(), origin.copy(), scale.copy()
-        controls[unfit], origin[unfit], scale[unfit] = controls[fit[0]], origin[fit[0]], scale[fit[0]]
     by_surface = (count, along)
     fine = ok & _distinct(centre.reshape(by_surface + (3,)), normal.reshape(by_surface + (3,)),
                           radius.reshape(by_surface), scale)
@@ -233,8 +197,8 @@ def mesh_blade_circles(names, controls: np.ndarray, origin: np.ndarray, scale: n
                           ) / sampled.shape[1]
     vertex_signs = np.ones((count * along, columns))
     if np.any(suspicious):
-        fine &= _fold_signs(curve, controls, origin, scale, t, u, frame, speed, theta, suspicious, along,
-                            vertex_signs, agreement)
+        fine &= _fold_signs(sampler, origin, scale, t, u, frame, speed, theta, suspicious, along, vertex_signs,
+                            agreement)
     folds = (agreement < -FOLD_AGREEMENT).reshape(count, along - 1)
     parity = np.concatenate([np.zeros((count, 1), dtype=np.int64), np.cumsum(folds, axis=1)], axis=1) % 2
     signs = vertex_signs.reshape(by_surface + (columns,)) * (1.0 - 2.0 * parity)[..., None]
@@ -330,13 +294,13 @@ def mesh_blade_circles(names, controls: np.ndarray, origin: np.ndarray, scale: n
     return results
 
 
-def _fold_signs(curve, controls, origin, scale, t, u, frame, speed, theta, suspicious, along, vertex_signs,
+def _fold_signs(sampler, origin, scale, t, u, frame, speed, theta, suspicious, along, vertex_signs,
                 agreement) -> np.ndarray:
     """circles._continuous_signs for the suspicious rings of many surfaces: fills their rows of
     vertex_signs (S K, M) and the agreement (S (K - 1),) of consecutive suspicious rings; returns
     (S,) whether each surface's nearby rings could be sampled (else the per-surface path refuses)."""
     columns = len(theta)
-    fine = np.ones(len(controls), dtype=bool)
+    fine = np.ones(len(origin), dtype=bool)
     near = np.flatnonzero(suspicious)
     values = frame_values(frame[near], theta, speed[near])
     folds = normal_field.reversals(values)
@@ -345,9 +309,9 @@ def _fold_signs(curve, controls, origin, scale, t, u, frame, speed, theta, suspi
         ring = near[row]
         surface, at = ring // along, t[ring % along]
         before_t = np.maximum(at - STATIONARY_OFFSET, 0.0)
-        after_t = np.minimum(at + STATIONARY_OFFSET, curve.segment_count)
+        after_t = np.minimum(at + STATIONARY_OFFSET, sampler.segment_count)
         count = len(ring)
-        nearby, sampled = _nearby_frames(curve, controls, np.concatenate([surface, surface]),
+        nearby, sampled = _nearby_frames(sampler, np.concatenate([surface, surface]),
                                          np.concatenate([before_t, after_t]), np.concatenate([u[ring], u[ring]]),
                                          origin, scale)
         fine[np.concatenate([surface, surface])[~sampled]] = False
