@@ -1,11 +1,12 @@
 """Meshing a scene file of many small tubes: the batched pass against meshing each surface alone.
 
     python benchmarks/bench_scene_batch.py [--surfaces 2000] [--controls 4] [--repeats 1]
+                                           [--interpolation blade|motor]
 
 Writes the scene of ``bench_scene_reader`` (``surfaces`` catmull_rom tubes of ``controls``
-random circles, 8 around, 4 rings per control), reads it once, then meshes it in process
-(``mesh_scene``, reading and export excluded) surface by surface (``batched=False``) and with
-the batched pass, and prints the CPU time of this process per surface for both and their
+random circles, 8 around, 4 rings per control; blade or motor interpolation), reads it once,
+then meshes it in process (``mesh_scene``, reading and export excluded) surface by surface
+(``batched=False``) and with the batched pass, and prints the CPU time of this process per surface for both and their
 ratio (the machine may be shared: CPU time, the best of ``repeats``), with the share of
 surfaces the batched pass took. Checks that both give the same meshes, bit for bit; never
 asserts a time. BLAS is pinned to one thread unless OPENBLAS_NUM_THREADS / OMP_NUM_THREADS is
@@ -61,17 +62,21 @@ def main(argv=None) -> int:
     parser.add_argument("--surfaces", type=int, default=2000)
     parser.add_argument("--controls", type=int, default=4)
     parser.add_argument("--repeats", type=int, default=1)
+    parser.add_argument("--interpolation", choices=("blade", "motor"), default="blade")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "scene.yaml"
-        path.write_text(flow_style(scene_document(args.surfaces, args.controls)))
+        text = flow_style(scene_document(args.surfaces, args.controls))
+        path.write_text(text.replace("    type: circles\n",
+                                     f"    type: circles\n    interpolation: {args.interpolation}\n"))
         scene = load_scene(path, rendering=False)
     count = len(scene.surfaces)
     share = _batched_share(scene.surfaces, Resolution(), False)
     taken = sum(1 for i in range(count) if share.takes(i) and share.mesh(i) is not None)
     alone, reference = cpu_best(args.repeats, lambda: mesh_scene(scene, batched=False))
     batched, meshes = cpu_best(args.repeats, lambda: mesh_scene(scene, batched=True))
-    print(f"{count} tubes of {args.controls} controls; load average {os.getloadavg()[0]:.2f}")
+    print(f"{count} tubes of {args.controls} controls, {args.interpolation} interpolation; "
+          f"load average {os.getloadavg()[0]:.2f}")
     print(f"  each surface alone   {1e3 * alone / count:8.3f} ms CPU per surface")
     print(f"  batched pass         {1e3 * batched / count:8.3f} ms CPU per surface "
           f"({taken} of {count} surfaces batched, the rest alone)")
