@@ -262,3 +262,31 @@ def test_a_large_surface_is_meshed_alone_as_before():
     scene = load_scene(ROOT / "examples" / "kb_tube.yaml", rendering=False)
     assert batched_count(scene, Resolution(256, 256)) == 0  # 257 x 256 vertices: over CHUNK_VERTICES
     assert batched_count(scene, Resolution(64, 256)) == 1
+
+
+def test_a_lone_row_gives_the_bits_it_gets_in_a_batch():
+    """stable_rows: products, bases and normals of one object alone sum as in a batch of many."""
+    from cgamesh.geometry import objects
+    from cgamesh.geometry.curves.bezier import RationalBezier
+    from cgamesh.geometry.curves.kochanek_bartels import KochanekBartels
+    from cgamesh.meshing import normals as normal_field
+
+    rng = np.random.default_rng(3)
+    centre, normal, radius = rng.normal(size=(50, 3)), rng.normal(size=(50, 3)), 0.1 + rng.random(50)
+    batch = objects.circle_from_center_normal_radius(centre, normal, radius)
+    alone = np.array([objects.circle_from_center_normal_radius(c, n, r) for c, n, r in zip(centre, normal, radius)])
+    assert np.array_equal(batch, alone)
+    t = rng.random(40) * 3.0
+    for curve in (KochanekBartels(4, 0.3, -0.2, 0.1), RationalBezier((1.0, 2.0, 0.5, 3.0))):
+        many = curve.basis(t)
+        for i in range(len(t)):
+            one = curve.basis(t[i:i + 1])
+            assert np.array_equal(one.weights[0], many.weights[i])
+            assert np.array_equal(one.derivatives[0], many.derivatives[i])
+    theta = 2.0 * np.pi * np.arange(5) / 4
+    block = normal_field._SCRATCH_VALUES // (3 * len(theta))
+    raw, speed = rng.normal(size=(block + 1, 7, 3)), np.ones(block + 1)
+    whole = normal_field.unit_normals(raw, theta, speed, 1e-6)[0]
+    split = [normal_field.unit_normals(raw[part], theta, speed[part], 1e-6)[0]
+             for part in (slice(0, block - 1), slice(block - 1, None))]
+    assert np.array_equal(whole, np.concatenate(split))  # a lone last block of one ring included

@@ -136,7 +136,10 @@ def unit_normals(coefficients: np.ndarray, theta: np.ndarray, speed: np.ndarray,
         count = stop - start
         values, lengths = planes[:, :count], scratch[:count]
         for component in range(3):
-            np.matmul(by_component[component, start:stop], basis, out=values[component])
+            if count > 1:
+                np.matmul(by_component[component, start:stop], basis, out=values[component])
+            else:  # a lone ring summed as in a block of several (stable_rows)
+                values[component] = rows_times(by_component[component, start:stop], basis)
         np.sum(np.square(values, out=squares[:, :count]), axis=0, out=lengths)
         np.sqrt(lengths, out=lengths)
         lengths.min(axis=1, out=smallest[start:stop])

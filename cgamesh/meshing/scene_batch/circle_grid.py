@@ -127,20 +127,6 @@ def _distinct(centre, normal, radius, scale) -> np.ndarray:
     return np.all(step > DISTINCT_RING_FRACTION, axis=1)
 
 
-def _unit_normals(raw, theta, speed):
-    """normal_field.unit_normals over many rings; no block of one ring (BLAS sums a lone row in
-    another order), so each ring's normals are those it gets among its own surface's rings."""
-    rings = len(raw)
-    block = max(1, normal_field._SCRATCH_VALUES // (3 * len(theta)))
-    cut = rings - 2 if rings > 2 and rings % block == 1 else rings
-    unit, smallest, near = normal_field.unit_normals(raw[:cut], theta, speed[:cut], NEAR_ZERO_FRACTION)
-    if cut == rings:
-        return unit, smallest, near
-    tail = normal_field.unit_normals(raw[cut:], theta, speed[cut:], NEAR_ZERO_FRACTION)
-    return (np.concatenate([unit, tail[0]]), np.concatenate([smallest, tail[1]]),
-            (np.concatenate([near[0], tail[2][0] + cut]), np.concatenate([near[1], tail[2][1]])))
-
-
 def mesh_circle_group(names, sampler, origin: np.ndarray, scale: np.ndarray, closed: bool, around: int,
                       along: int, tangents: bool, caps: np.ndarray | None = None) -> list[SurfaceMesh | None]:
     """The meshes of ``mesh_circle_surface(surface, around, along, caps=caps, closed=closed,
@@ -187,7 +173,7 @@ def mesh_circle_group(names, sampler, origin: np.ndarray, scale: np.ndarray, clo
     circle_basis = np.stack([np.ones_like(theta), np.cos(theta), np.sin(theta)], axis=1)
     placement = np.stack([centre, radius[:, None] * u, radius[:, None] * v], axis=1)
     positions = normal_field.expand(placement, circle_basis)
-    normals, smallest, near_zero = _unit_normals(raw, theta, speed)
+    normals, smallest, near_zero = normal_field.unit_normals(raw, theta, speed, NEAR_ZERO_FRACTION)
 
     # circles._continuous_signs
     suspicious = smallest <= normal_field.derivative_bound(raw) * (theta[1] - theta[0])
