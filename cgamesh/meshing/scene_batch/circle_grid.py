@@ -1,19 +1,20 @@
-"""Many blade-circle surfaces of one shape of work meshed as one set of arrays.
+"""Many circle surfaces of one shape of work meshed as one set of arrays.
 
-A group shares its curve (kind, control count, parameters, closed), its rings along and
-vertices around: its S surfaces' K rings each are S K rows, and every step of
-``circles.mesh_circle_surface`` that works ring by ring (the curve's basis, the projection,
-the circles read out, their frames, the normal field's trigonometric fits, the vertices,
-normals, tangents and UVs) runs once over all of them, with the same operations on every row,
-so each surface's mesh is the per-surface mesher's, bit for bit. Steps along a surface's
-rings (the rotation scan, running lengths, cumulative signs) run along a surface axis.
+A group shares its sampler (samplers.py: the curve or motion kind, control count, parameters,
+closed), its rings along and vertices around: its S surfaces' K rings each are S K rows, and
+every step of ``circles.mesh_circle_surface`` that works ring by ring (the circles and their
+rates, read out in each surface's frame, transported frames, the normal field's trigonometric
+fits, fold detection on suspicious rings with the rings a step before and after them, vertices,
+normals, tangents, UVs, faces and their winding) runs once over all of them, with the same
+operations on every row, so each surface's mesh is the per-surface mesher's, bit for bit.
+Steps along a surface's rings (the rotation scan, running lengths, cumulative signs, the
+outward test) run along a surface axis.
 
-What the per-surface mesher does only for rare surfaces is not batched: a surface whose
-projection scan finds a small margin or an orientation flip (an error, or a line to refine),
-a circle through infinity, rings within DISTINCT_RING_FRACTION of each other, a ring that
-stands still, a ring whose normal field may reverse between columns (a fold), or an
-outward direction the seven-sample estimate cannot tell is reported as not meshed (None),
-and the caller meshes it alone.
+What the per-surface mesher does only for rare surfaces is not batched: a surface whose scan
+is not surely clear (an error, or a line to refine), a circle through infinity at a ring,
+rings within DISTINCT_RING_FRACTION of each other, a ring that stands still, nearby rings with
+no circle, or an outward sum too near zero to trust is reported as not meshed (None), and the
+caller meshes it alone.
 """
 
 from __future__ import annotations
