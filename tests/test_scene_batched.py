@@ -210,10 +210,11 @@ def test_random_scenes_mesh_the_same_batched_or_are_refused_alike(text, tangents
 @given(text=scenes())
 def test_the_quick_projection_scan_passes_only_what_the_exact_scan_passes(text):
     """projection_scan.surely_projectable from the controls' products: a surface it passes is one
-    whose exact scan (EvolvedSurface.check_projection_exists on its rings) raises nothing."""
+    whose exact scan (EvolvedSurface.check_projection_exists on its rings, then sample) raises
+    nothing; exactly_projectable decides as that scan does, either way."""
     from cgamesh.geometry.construction import build_surface
     from cgamesh.meshing.scene_batch.controls import build_blade_controls
-    from cgamesh.meshing.scene_batch.projection_scan import surely_projectable
+    from cgamesh.meshing.scene_batch.projection_scan import exactly_projectable, surely_projectable
 
     scene = parse_scene(text, "random.yaml")
     for spec in scene.surfaces:
@@ -224,30 +225,43 @@ def test_the_quick_projection_scan_passes_only_what_the_exact_scan_passes(text):
             continue
         surface = build_surface(spec)
         t = np.linspace(0.0, surface.segment_count, spec.along)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                surface.check_projection_exists(sampled=t)
+                surface.sample(t)
+            passes = True
+        except CgameshError:
+            passes = False
+        assert exactly_projectable(surface.curve, t, built.controls)[0] == passes
         if surely_projectable(surface.curve, t, built.controls)[0]:
-            surface.check_projection_exists(sampled=t)  # raises if the exact scan refuses it
+            assert passes
 
-
-def test_a_carrier_that_flips_between_samples_is_left_to_the_exact_scan():
+def test_a_carrier_that_flips_between_samples_is_refined_exactly():
     """Two circles nearly in one plane: the carrier part flips between scan samples, which only
-    the per-surface scan's refinement tells from a line (here it is none, and the tube meshes)."""
-    text = ("cgamesh: 1\nsurfaces:\n  - name: nearly_flat\n    type: circles\n    curve: linear\n"
-            "    resolution: {around: 8, along: 9}\n"
-            "    controls:\n      - {center: [0, 0, 0], normal: [0, 0, 1], radius: 1}\n"
-            "      - {center: [3, 0, 0.5], normal: [0, 0.2, 1], radius: 1.5}\n")
+    the per-surface scan's refinement tells from a line; the batched pass runs that refinement
+    (here it finds none: the tube is batched) and so refuses a line where the per-surface path does."""
     from cgamesh.geometry.construction import make_curve
     from cgamesh.meshing.scene_batch.controls import build_blade_controls
-    from cgamesh.meshing.scene_batch.projection_scan import surely_projectable
+    from cgamesh.meshing.scene_batch.projection_scan import exactly_projectable, surely_projectable
 
-    scene = parse_scene(text, "flip.yaml")
-    spec = scene.surfaces[0]
-    built = build_blade_controls([spec], 2)
-    assert built.ok[0] and not surely_projectable(make_curve(spec), np.linspace(0.0, 1.0, 9), built.controls)[0]
-    assert batched_count(scene) == 0
-    alone, batched = mesh_both(scene)
-    assert not isinstance(alone, Exception)
-    assert_same_meshes(alone, batched)
-
+    head = "cgamesh: 1\nsurfaces:\n  - name: {}\n    type: circles\n    curve: linear\n    controls:\n"
+    flip = head.format("nearly_flat") + ("      - {center: [0, 0, 0], normal: [0, 0, 1], radius: 1}\n"
+                                          "      - {center: [3, 0, 0.5], normal: [0, 0.2, 1], radius: 1.5}\n")
+    line = head.format("line") + ("      - {center: [0, 0, 0], normal: [0, 0, 1], radius: 1}\n"
+                                   "      - {center: [3, 0, 0], normal: [0, 0, 1], radius: 0.5}\n"
+                                   "      - {center: [6, 0, 1], normal: [0, 1, 1], radius: 1}\n")
+    for text, meshes in ((flip, True), (line, False)):
+        scene = parse_scene(text, "flip.yaml")
+        spec = scene.surfaces[0]
+        built = build_blade_controls([spec], len(spec.controls))
+        t = np.linspace(0.0, len(spec.controls) - 1.0, spec.along)
+        assert built.ok[0] and not surely_projectable(make_curve(spec), t, built.controls)[0]
+        assert exactly_projectable(make_curve(spec), t, built.controls)[0] == meshes
+        assert batched_count(scene) == int(meshes)
+        alone, batched = mesh_both(scene)
+        assert isinstance(alone, Exception) != meshes and (meshes or "turns into a line" in str(alone))
+        assert_alike(alone, batched)
 
 def test_the_benchmark_runs_at_a_small_size_and_finds_the_meshes_identical(capsys):
     sys.path.insert(0, str(ROOT / "benchmarks"))

@@ -24,7 +24,9 @@ import numpy as np
 
 from cgamesh.geometry.algebra import products
 from cgamesh.geometry.algebra.layout import BLADE_COUNT, grade_indices
+from cgamesh.geometry import flatness
 from cgamesh.geometry.flatness import carrier_part
+from cgamesh.geometry.projection import margin, project_blades
 from cgamesh.geometry.surface import MIN_MARGIN, SCAN_SAMPLES_PER_SEGMENT
 
 SURE_MARGIN = 100.0 * MIN_MARGIN
@@ -104,4 +106,56 @@ def surely_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarray
         signed = np.einsum("sac,sac->sa", m[:, :-1], m[:, 1:])
         bound = length[:, :-1] * error[:, 1:] + length[:, 1:] * error[:, :-1] + error[:, :-1] * error[:, 1:]
         ok[start:stop] = sure & np.all(signed > bound, axis=1)
+    return ok
+
+
+def exactly_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarray:
+    """(S,) bool: check_projection_exists(sampled=t) passes, decided as it decides, bit for bit,
+    for surfaces the quick scan could not vouch for (``surely_projectable`` False): the margins
+    and projected blades at every scan sample, and each flip of the carrier between samples
+    refined (flatness.find_line's search, every flip of every surface at once) to whether the
+    object there reaches past LINE_REACH (a line: the per-surface path refuses the surface)."""
+    count, n, _ = controls.shape
+    scan = scan_parameters(curve, t)
+    samples = len(scan)
+    basis = curve.basis(scan)
+    flat = controls.reshape(-1, BLADE_COUNT)
+    picked = flat[(basis.indices[None] + (np.arange(count) * n)[:, None, None]).reshape(count * samples, -1)]
+    weights = np.broadcast_to(basis.weights, (count,) + basis.weights.shape).reshape(count * samples, -1)
+    values = np.einsum("ak,akm->am", weights, picked)
+    margins = margin(values, 3, np.tile(basis.weight_sum(), count)).reshape(count, samples)
+    ok = np.all(margins >= MIN_MARGIN, axis=1)
+    m = carrier_part(project_blades(values, 3), 3).reshape(count, samples, 3)
+    lows, highs, owners = [], [], []
+    for s in np.flatnonzero(ok):  # each surface's own (A - 1, 3) sums, as find_line takes them
+        flips = np.flatnonzero(~(np.einsum("ac,ac->a", m[s, :-1], m[s, 1:]) > 0.0))
+        lows.append(scan[flips])
+        highs.append(scan[flips + 1])
+        owners.append(np.full(len(flips), s))
+    if not lows or sum(len(low) for low in lows) == 0:
+        return ok
+    lo, hi, owner = np.concatenate(lows), np.concatenate(highs), np.concatenate(owners)
+
+    def norms_at(grid):
+        at = grid.ravel()
+        where = curve.basis(at)
+        chosen = np.repeat(owner, grid.shape[1])
+        rows = flat[where.indices + (chosen * n)[:, None]]
+        with np.errstate(invalid="ignore", over="ignore"):
+            blades = project_blades(np.einsum("ak,akm->am", where.weights, rows), 3)
+            return np.linalg.norm(carrier_part(blades, 3), axis=-1).reshape(grid.shape)
+
+    best_norm = np.full(len(lo), np.inf)
+    rows = np.arange(len(lo))
+    for _ in range(flatness._REFINE_ROUNDS):  # flatness.find_line's search, step for step
+        grid = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, flatness._REFINE_SAMPLES)
+        norms = norms_at(grid)
+        norms = np.where(np.isfinite(norms), norms, np.inf)
+        k = np.argmin(norms, axis=1)
+        better = norms[rows, k] < best_norm
+        best_norm[better] = norms[rows, k][better]
+        step = (hi - lo) / (flatness._REFINE_SAMPLES - 1)
+        lo, hi = np.maximum(lo, grid[rows, k] - step), np.minimum(hi, grid[rows, k] + step)
+    line = flatness.reach(best_norm[:, None] * np.array([1.0, 0.0, 0.0]), 3) > flatness.LINE_REACH
+    ok[owner[line]] = False
     return ok

@@ -19,7 +19,7 @@ from cgamesh.geometry.motor_surface import SCAN_SAMPLES_PER_SEGMENT, circle_blad
 from cgamesh.geometry.motors import GLOBAL_KINDS, MIN_NORMAL_LENGTH, MotionState
 from cgamesh.geometry.projection import project
 from cgamesh.geometry.surface import MIN_MARGIN
-from cgamesh.meshing.scene_batch.projection_scan import surely_projectable
+from cgamesh.meshing.scene_batch.projection_scan import exactly_projectable, surely_projectable
 
 
 class BladeSampler:
@@ -31,7 +31,13 @@ class BladeSampler:
         self.segment_count = curve.segment_count
 
     def scan_ok(self, t: np.ndarray) -> np.ndarray:
-        return surely_projectable(self.curve, t, self.controls)
+        """The quick scan from the controls' products; the surfaces it cannot vouch for (a carrier
+        that flips between samples, a small margin) scanned exactly, as the per-surface path."""
+        ok = surely_projectable(self.curve, t, self.controls)
+        doubtful = np.flatnonzero(~ok)
+        if doubtful.size:
+            ok[doubtful] = exactly_projectable(self.curve, t, self.controls[doubtful])
+        return ok
 
     def at(self, surface: np.ndarray, t: np.ndarray):
         n = self.controls.shape[1]
