@@ -78,8 +78,10 @@ class SurfacePlan:
     prepared: object = None  # a tolerance's PreparedPlan, priced here and placed by mesh_planned
 
 
-def plan_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tangents: bool = False) -> SurfacePlan:
-    """Check and price one surface's request (see the module doc); builds its evolved surface."""
+def plan_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tangents: bool = False,
+                 build: bool = True) -> SurfacePlan:
+    """Check and price one surface's request (see the module doc); builds its evolved surface
+    (a fixed resolution's only when ``build``: the batched pass builds its own)."""
     tolerance = _tolerance(spec, resolution)
     overridden = resolution.around is not None or resolution.along is not None
     if tolerance is None:
@@ -94,7 +96,7 @@ def plan_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
         held, peak = costs.surface_bytes(spec.type, around, along, spec.caps, tangents)
         where = (f"{spec.location} with --around {around} --along {along}" if overridden
                  else f"{spec.location}.resolution")
-        return SurfacePlan(spec, build_surface(spec), around, along, None,
+        return SurfacePlan(spec, build_surface(spec) if build else None, around, along, None,
                            costs.grid_vertices(spec.type, around, along, spec.caps), held, peak,
                            where, f"mesh ({around} x {along})")
     surface = build_surface(spec)
@@ -161,7 +163,7 @@ def _check_uv_scale(mesh: SurfaceMesh, spec: SurfaceSpec) -> None:
 
 def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lambda label: None,
                tangents: bool = False, max_memory=None,
-               outputs: Sequence[str] = ()) -> list[tuple[SurfaceMesh, Material]]:
+               outputs: Sequence[str] = (), batched: bool = True) -> list[tuple[SurfaceMesh, Material]]:
     """Every surface's mesh with its material, in file order; ``progress(name)`` after each.
 
     The UVs are those of each surface's ``uv`` mode (uv.py: natural, none, or one xatlas atlas
@@ -169,9 +171,15 @@ def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lam
     is priced against ``max_memory`` (see ``mesh_surface``): every mesh kept, the largest
     meshing peak, and the largest export of ``outputs`` (their file names or extensions,
     written one after another); ResourceLimitError when it exceeds it.
+
+    ``batched``: the surfaces the batched pass covers (cgamesh.meshing.scene_batch) are meshed
+    there, group by group, with the meshes the per-surface path makes; False meshes every
+    surface alone.
     """
     budget = costs.Budget.of(max_memory)
-    plans = [plan_surface(spec, resolution, tangents) for spec in scene.surfaces]
+    batch = _batched_share(scene.surfaces, resolution, tangents) if batched else None
+    plans = [plan_surface(spec, resolution, tangents, build=batch is None or not batch.takes(i))
+             for i, spec in enumerate(scene.surfaces)]
     for plan in plans:
         budget.require(plan.peak, plan.where, plan.what)
     held = sum(plan.held for plan in plans)
@@ -181,10 +189,33 @@ def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lam
     budget.require(held + transient, f"{scene.path}", f"meshes and exports ({len(plans)} surfaces, "
                    f"about {vertices} vertices)")
     meshes = []
-    for plan in plans:
-        meshes.append(mesh_planned(plan, tangents))
+    for i, plan in enumerate(plans):
+        mesh = batch.mesh(i) if batch is not None and batch.takes(i) else None
+        if mesh is None:
+            if plan.surface is None:  # left by the batched pass: built and meshed alone
+                plan = plan_surface(plan.spec, resolution, tangents)
+            mesh = mesh_planned(plan, tangents)
+        meshes.append(mesh)
         progress(plan.spec.name)
     for mesh, spec in zip(meshes, scene.surfaces):
         _check_uv_scale(mesh, spec)
     meshes = uv_map.apply_uv_modes(meshes, [(spec.uv, spec.uv_scale) for spec in scene.surfaces])
     return [(mesh, spec.material) for mesh, spec in zip(meshes, scene.surfaces)]
+
+
+def _batched_share(specs: Sequence[SurfaceSpec], resolution: Resolution, tangents: bool):
+    """The batched pass's share of a scene (scene_batch.BatchedScene), from each surface's request
+    as ``plan_surface`` reads it; a request it would refuse is left to it (and refused there)."""
+    from cgamesh.meshing.scene_batch import BatchedScene
+
+    requests = []
+    for spec in specs:
+        try:
+            tolerance = _tolerance(spec, resolution)
+        except CgameshError:
+            tolerance = float("nan")  # not batched: plan_surface names the error
+        if tolerance is None:
+            requests.append((resolution.around or spec.around, resolution.along or spec.along, None))
+        else:
+            requests.append((None, None, tolerance))
+    return BatchedScene.prepare(specs, requests, tangents)

@@ -28,6 +28,16 @@ def test_several_outputs_are_written_from_one_meshing(tmp_path, capsys, monkeypa
         return original(plan, *args, **kwargs)
 
     monkeypatch.setattr(cgamesh.pipeline, "mesh_planned", counting)
+    # the batched pass (cgamesh.meshing.scene_batch) meshes groups of surfaces: count them too
+    from cgamesh.meshing.scene_batch import scene as batched_scene
+
+    group = batched_scene.mesh_circle_group
+
+    def counting_group(names, *args, **kwargs):
+        calls.extend(names)
+        return group(names, *args, **kwargs)
+
+    monkeypatch.setattr(batched_scene, "mesh_circle_group", counting_group)
     outputs = [tmp_path / f"tube{suffix}" for suffix in ALL]
     assert main([str(EXAMPLE), *[a for o in outputs for a in ("-o", str(o))], *LOW]) == 0
     assert calls == ["kb_tube"]

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cgamesh.geometry.algebra.stable_rows import rows_times
+
 TRIG_DEGREE = 3
 TERMS = 2 * TRIG_DEGREE + 1
 SAMPLE_ANGLES = 2.0 * np.pi * np.arange(TERMS) / TERMS
@@ -84,7 +86,7 @@ def fit(samples: np.ndarray) -> np.ndarray:
 
 def frame_coordinates(velocity: np.ndarray, radial: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """(zeta, rho) (K, 7, 2): velocity (K, 7, 3) along the circle's normal and along e_r."""
-    zeta = np.einsum("ksi,ki->ks", velocity, normal) @ _ZETA_DEGREE_2.T
+    zeta = rows_times(np.einsum("ksi,ki->ks", velocity, normal), _ZETA_DEGREE_2.T)
     rho = np.einsum("ksi,ksi->ks", velocity, radial)
     return np.stack([zeta, rho], axis=-1)
 
@@ -134,7 +136,10 @@ def unit_normals(coefficients: np.ndarray, theta: np.ndarray, speed: np.ndarray,
         count = stop - start
         values, lengths = planes[:, :count], scratch[:count]
         for component in range(3):
-            np.matmul(by_component[component, start:stop], basis, out=values[component])
+            if count > 1:
+                np.matmul(by_component[component, start:stop], basis, out=values[component])
+            else:  # a lone ring summed as in a block of several (stable_rows)
+                values[component] = rows_times(by_component[component, start:stop], basis)
         np.sum(np.square(values, out=squares[:, :count]), axis=0, out=lengths)
         np.sqrt(lengths, out=lengths)
         lengths.min(axis=1, out=smallest[start:stop])

@@ -19,6 +19,7 @@ from typing import Sequence
 
 import numpy as np
 
+from cgamesh.geometry.algebra.stable_rows import rows_times
 from cgamesh.geometry.algebra.layout import (
     BLADE_COUNT,
     GEOMETRIC_SIGN,
@@ -144,8 +145,9 @@ def _product(kind, a, b, grades_a, grades_b, grades_out):
         left = a[..., blades_a][..., :, None]
         right = b[..., blades_b][..., None, :]
         pairs = (left * right).reshape(shape + (blades_a.size * blades_b.size,))
-        out[..., blades_out] = pairs @ matrix
+        out[..., blades_out] = rows_times(pairs, matrix)
     return out
+
 
 
 def right_operator(kind: str, b, grades_a: Sequence[int], grades_b: Sequence[int] = ALL_GRADES,
@@ -163,7 +165,8 @@ def right_operator(kind: str, b, grades_a: Sequence[int], grades_b: Sequence[int
     per_b = matrix.reshape(blades_a.size, blades_b.size, -1).transpose(1, 0, 2).reshape(blades_b.size, -1)
     out = np.zeros(b.shape[:-1] + (blades_a.size, BLADE_COUNT))
     if blades_out.size:
-        out[..., blades_out] = (b[..., blades_b] @ per_b).reshape(b.shape[:-1] + (blades_a.size, blades_out.size))
+        out[..., blades_out] = rows_times(b[..., blades_b], per_b).reshape(
+            b.shape[:-1] + (blades_a.size, blades_out.size))
     return blades_a, out
 
 

@@ -71,8 +71,10 @@ class RationalBezier:
         w = np.asarray(self.weights, dtype=np.float64)
         w = w / w.max()  # the curve is unchanged by a common factor; 1e300 weights stay finite
         b, db = bernstein(order, t), bernstein_derivative(order, t)
-        denominator = b @ w
-        d_denominator = db @ w
+        # row sums, not b @ w: BLAS's matrix-vector kernel sums a lone row, or a few, in another
+        # order than many, and a curve's basis must not depend on how many parameters it is given
+        denominator = (b * w).sum(axis=1)
+        d_denominator = (db * w).sum(axis=1)
         rational = b * w / denominator[:, None]
         # Quotient rule of eq. 32, written per basis function.
         d_rational = (db * w - rational * d_denominator[:, None]) / denominator[:, None]

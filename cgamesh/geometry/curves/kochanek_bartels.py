@@ -63,7 +63,10 @@ class KochanekBartels:
         # weights of the four neighbouring controls (clamped ends repeat an index; the
         # repeated weights simply add when the basis is evaluated).
         mix = np.stack([point_start, v_start, point_end, v_end])  # (4 hermite, 4 controls)
-        return CurveBasis(self._neighbours(segment), h @ mix, dh @ mix)
+        # explicit sums over the four Hermite terms, not h @ mix: a matrix product sums a lone
+        # parameter in another order than many, and the basis must not depend on how many it gets
+        return CurveBasis(self._neighbours(segment), (h[:, :, None] * mix).sum(axis=1),
+                          (dh[:, :, None] * mix).sum(axis=1))
 
 
 def catmull_rom(control_count: int, closed: bool = False) -> KochanekBartels:
