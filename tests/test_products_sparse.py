@@ -35,6 +35,6 @@ def test_sparse_sums_equal_the_matrix_product(kind, rows):
         b = rng.normal(size=(rows, 32))
         got = products._product(kind, a, b, grades_a, grades_b, grades_out)
         sel = [products._selection(g) for g in (grades_a, grades_b, grades_out)]
-        taken += products._sparse_steps(kind, *sel) is not None
+        taken += products._term_lists(kind, *sel) is not None
         np.testing.assert_array_equal(got, dense(kind, a, b, grades_a, grades_b, grades_out))
     assert taken > 0  # the blade-by-blade sums were exercised, not only the matrix
