@@ -168,6 +168,16 @@ def _product(kind, a, b, grades_a, grades_b, grades_out):
     return out
 
 
+def product_terms(kind: str, grades_a: Sequence[int], grades_b: Sequence[int], grades_out: Sequence[int]):
+    """(blades_a, blades_b, blades_out, terms) of a product restricted to grades (or ``Blades``):
+    terms[k] lists result blade blades_out[k]'s terms (i, j, positive), +-a[blades_a[i]] b[blades_b[j]],
+    in the order the batched products sum them; for callers that form a product's few terms
+    themselves (operands not stored as (..., 32) multivectors). None past 256 blade pairs."""
+    selections = _selection(grades_a), _selection(grades_b), _selection(grades_out)
+    blades_a, blades_b, blades_out, _ = _bilinear_map(kind, *selections)
+    return blades_a, blades_b, blades_out, _term_lists(kind, *selections)
+
+
 def right_operator(kind: str, b, grades_a: Sequence[int], grades_b: Sequence[int] = ALL_GRADES,
                    grades_out: Sequence[int] = ALL_GRADES) -> tuple[np.ndarray, np.ndarray]:
     """The linear map a -> a (kind) b for fixed b (..., 32), as (blades_a, matrix (..., A, 32)).

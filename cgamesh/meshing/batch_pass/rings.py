@@ -19,6 +19,7 @@ import numpy as np
 
 from cgamesh.geometry.algebra import products, rotors
 from cgamesh.meshing import normals as normal_field
+from cgamesh.meshing.batch_pass.circle_rows import CircleRows
 from cgamesh.meshing.batch_pass.motions import ChainMotions
 from cgamesh.meshing.circles import (E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION, OUTWARD_TRUST, STATIONARY_FRACTION,
                                      RingNormals, fold_screen, frame_values)
@@ -40,35 +41,25 @@ class _BladeRings:
     centre: np.ndarray
     normal: np.ndarray
     radius: np.ndarray
-    omega: np.ndarray
+    omega: np.ndarray  # (10, K) bivector rows (circle_rows)
     origin: np.ndarray
     scale: np.ndarray
 
     @classmethod
     def of(cls, state, origin, scale) -> "_BladeRings":
-        from cgamesh.geometry.motor_surface import circle_blade_rates, circle_blades
-        from cgamesh.geometry.objects import circle_euclidean
-
-        blades, derivatives = circle_blades(state), circle_blade_rates(state)
-        centre, normal, radius = circle_euclidean(blades)
-        omega = products.geometric(blades, derivatives, (3,), (3,), (2,))
-        return cls(origin + scale[:, None] * centre, normal, scale * radius, omega, origin, scale)
+        circles = CircleRows.of(state)
+        centre, normal, radius = circles.euclidean()
+        return cls(origin + scale[:, None] * centre, normal, scale * radius, circles.omega(), origin, scale)
 
     @property
     def frame(self) -> _RingFrames:
         return _RingFrames(self.scale[:, None, None])
 
     def velocity(self, points: np.ndarray) -> np.ndarray:
-        from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
-        from cgamesh.geometry.algebra.layout import grade_indices
+        from cgamesh.geometry.surface import carried_velocity
 
         scale = self.scale[:, None, None]
-        local = (points - self.origin[:, None, :]) / scale
-        vector_map = products.right_operator("inner", self.omega, (1,), (2,), (1,))[1]
-        moved = up(local)[..., grade_indices(1)] @ vector_map
-        local_velocity = moved[..., EUCLIDEAN] - weight(moved)[..., None] * local
-        return scale * local_velocity
-
+        return scale * carried_velocity(self.omega, (points - self.origin[:, None, :]) / scale)
 
 
 @dataclass(frozen=True)
