@@ -109,10 +109,10 @@ def _single_blade_columns(kind: str, grades_a: tuple, grades_b: tuple, grades_ou
     return source, factor
 
 
-def _summed_terms(terms, blades_out, left, right, rows: int) -> np.ndarray:
-    """(rows, 32) product from operand coefficients left (A, ...), right (B, ...) (each row of
-    them one blade over the batch, or a scalar broadcast along it), summing ``_term_lists`` one
-    term at a time from zero: whole-row multiplies and adds into preallocated rows, no gathers."""
+def _summed_rows(terms, left, right, rows: int) -> np.ndarray:
+    """(O, rows): each result blade's ``_term_lists`` terms summed one at a time from zero, from
+    operand rows left (A, rows) and right (B, rows) (a row may be a scalar broadcast along the
+    batch): whole-row multiplies and adds into preallocated rows, no gathers."""
     summed = np.empty((len(terms), rows))
     scratch = np.empty(rows)
     for k, blade_terms in enumerate(terms):
@@ -133,9 +133,31 @@ def _summed_terms(terms, blades_out, left, right, rows: int) -> np.ndarray:
                 np.add(out, scratch, out=out)
             else:
                 np.subtract(out, scratch, out=out)
-    result = np.zeros((rows, BLADE_COUNT))
-    result[:, blades_out] = summed.T  # only the result's blades cross back to the row layout
-    return result
+    return summed
+
+
+def row_product(kind: str, left: np.ndarray, right: np.ndarray, grades_a: Sequence[int], grades_b: Sequence[int],
+                grades_out: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+    """A product of operands stored blade-major: left (A, K) the coefficients of the blades
+    ``grades_a`` admits (layout order), one row per blade (a row of shape (1,) is a constant),
+    right (B, K) likewise. Returns (blades_out, (O, K) rows): the same sums, so the same bits,
+    as the (..., 32) products on a batch, without a (K, 32) array or a gather of its columns.
+    At most 256 blade pairs."""
+    blades_a, blades_b, blades_out, terms = product_terms(kind, grades_a, grades_b, grades_out)
+    if terms is None:
+        raise ValueError(f"row_product takes at most 256 blade pairs, got {blades_a.size * blades_b.size}")
+    return blades_out, _summed_rows(terms, left, right, max(np.shape(left)[-1], np.shape(right)[-1]))
+
+
+def admitted_rows(blades: np.ndarray, rows: np.ndarray, grades: Sequence[int]) -> np.ndarray:
+    """Rows of every blade ``grades`` admits from rows (len(blades), K) of ``blades`` (zero where
+    ``blades`` has none; rows of blades it does not admit are dropped), as a product's result
+    becomes the operand of the next."""
+    admitted = np.flatnonzero(_mask(_selection(grades)))
+    full = np.zeros((admitted.size, rows.shape[1]))
+    present = np.isin(blades, admitted)
+    full[np.searchsorted(admitted, blades[present])] = rows[present]
+    return full
 
 
 def _product(kind, a, b, grades_a, grades_b, grades_out):
@@ -144,8 +166,9 @@ def _product(kind, a, b, grades_a, grades_b, grades_out):
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
     shape = np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
-    # one batch axis of two rows or more: there the matrix product sums row by row in order
-    terms = _term_lists(kind, *selections) if len(shape) == 1 and shape[0] > 1 else None
+    # one batch axis: every row's sums in the same order, whatever the batch's length (the matrix
+    # product of one row, a matrix-vector product, may sum in another order)
+    terms = _term_lists(kind, *selections) if len(shape) == 1 and shape[0] > 0 else None
     if terms is not None and blades_b.size == 1:
         # a times one blade (a dual): each result blade takes one term, a signed column of a
         # (0.0 + term, as the sums from zero give: -0.0 becomes 0.0); np.take, several times
@@ -158,7 +181,9 @@ def _product(kind, a, b, grades_a, grades_b, grades_out):
         # rows strided through the (rows, 32) layout would make every term several times slower
         left = np.moveaxis(a, -1, 0)[blades_a]
         right = np.moveaxis(b, -1, 0)[blades_b]
-        return _summed_terms(terms, blades_out, left, right, shape[0])
+        out = np.zeros(shape + (BLADE_COUNT,))
+        out[:, blades_out] = _summed_rows(terms, left, right, shape[0]).T  # only the result's blades cross back
+        return out
     out = np.zeros(shape + (BLADE_COUNT,))
     if blades_out.size:
         left = a[..., blades_a][..., :, None]

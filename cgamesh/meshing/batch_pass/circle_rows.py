@@ -20,42 +20,10 @@ import numpy as np
 
 from cgamesh.geometry.algebra import products
 from cgamesh.geometry.algebra.conformal import N_INF
-from cgamesh.geometry.algebra.layout import BLADE_COUNT, GRADES, grade_indices
+from cgamesh.geometry.algebra.layout import BLADE_COUNT, grade_indices
 
 _VECTOR = grade_indices(1)
 _N_INF = N_INF[_VECTOR][:, None]  # n_inf's vector coefficients, a column against (5, K) rows
-
-
-def _row_product(kind, left, right, grades_a, grades_b, grades_out) -> tuple[np.ndarray, np.ndarray]:
-    """(blades_out, (O, K) rows) of a product of blade-major operands: left (A, K) or (A, 1),
-    right (B, K) or (B, 1), the blades grades_a / grades_b admit, in layout order."""
-    _, _, blades_out, terms = products.product_terms(kind, grades_a, grades_b, grades_out)
-    rows = max(left.shape[1], right.shape[1])
-    out = np.empty((len(terms), rows))
-    scratch = np.empty(rows)
-    for k, blade_terms in enumerate(terms):
-        total = out[k]
-        i, j, positive = blade_terms[0]
-        np.multiply(left[i], right[j], out=total)
-        if positive:  # 0 + term, as the sum from zero (-0.0 becomes 0.0)
-            np.add(total, 0.0, out=total)
-        else:
-            np.subtract(0.0, total, out=total)
-        for i, j, positive in blade_terms[1:]:
-            np.multiply(left[i], right[j], out=scratch)
-            if positive:
-                np.add(total, scratch, out=total)
-            else:
-                np.subtract(total, scratch, out=total)
-    return blades_out, out
-
-
-def _rows_of(blades_out: np.ndarray, rows: np.ndarray, grades) -> np.ndarray:
-    """Rows of the blades ``grades`` admits, from rows of the blades ``blades_out`` (others zero)."""
-    admitted = np.flatnonzero(np.isin(GRADES, grades))
-    full = np.zeros((len(admitted), rows.shape[1]))
-    full[np.searchsorted(admitted, blades_out)] = rows
-    return full
 
 
 @lru_cache(maxsize=None)
@@ -79,7 +47,7 @@ def _dual(rows: np.ndarray, grade: int) -> np.ndarray:
 
 def _square(rows: np.ndarray, grade: int) -> np.ndarray:
     """The scalar X^2 (K,) of grade-``grade`` rows (``objects.square``)."""
-    return _row_product("geometric", rows, rows, (grade,), (grade,), (0,))[1][0]
+    return products.row_product("geometric", rows, rows, (grade,), (grade,), (0,))[1][0]
 
 
 def _vector_rows(x: np.ndarray, n_inf_part: np.ndarray) -> np.ndarray:
@@ -113,13 +81,13 @@ class CircleRows:
         plane = _vector_rows(n, np.einsum("ai,ai->a", n, c))
         d_plane = _vector_rows(dn, np.einsum("ai,ai->a", dn, c) + np.einsum("ai,ai->a", n, dc))
         one = (1,)
-        raw = _dual(_row_product("outer", sphere, plane, one, one, products.ALL_GRADES)[1], 2)
-        d_raw = _dual(_row_product("outer", d_sphere, plane, one, one, products.ALL_GRADES)[1]
-                      + _row_product("outer", sphere, d_plane, one, one, products.ALL_GRADES)[1], 2)
+        raw = _dual(products.row_product("outer", sphere, plane, one, one, products.ALL_GRADES)[1], 2)
+        d_raw = _dual(products.row_product("outer", d_sphere, plane, one, one, products.ALL_GRADES)[1]
+                      + products.row_product("outer", sphere, d_plane, one, one, products.ALL_GRADES)[1], 2)
         size_sq = _square(raw, 3)
         size = np.sqrt(size_sq)
         blades = raw / size[None, :]
-        half_d_size_sq = _row_product("geometric", raw, d_raw, (3,), (3,), (0,))[1][0]
+        half_d_size_sq = products.row_product("geometric", raw, d_raw, (3,), (3,), (0,))[1][0]
         rates = d_raw / size[None, :] - raw * (half_d_size_sq / (size_sq * size))[None, :]
         return cls(blades, rates)
 
@@ -127,19 +95,20 @@ class CircleRows:
         """``objects.circle_euclidean``: centre (K, 3), unit normal (K, 3), radius (K,)."""
         circles = self.blades
         n_inf = N_INF[_VECTOR][:, None]
-        plane = _row_product("outer", circles, n_inf, (3,), (1,), products.ALL_GRADES)[1]  # grade 4
-        blades_out, moved = _row_product("geometric", circles, n_inf, (3,), (1,), (2, 4))
-        _, point = _row_product("geometric", _rows_of(blades_out, moved, (2, 4)), circles, (2, 4), (3,), (1,))
-        # (K, 3) arrays laid out as the per-chain readout's, so the row norm sums as it does
-        normal = np.ascontiguousarray(-_dual(plane, 4)[:3].T)
+        plane = products.row_product("outer", circles, n_inf, (3,), (1,), products.ALL_GRADES)[1]  # grade 4
+        blades_out, moved = products.row_product("geometric", circles, n_inf, (3,), (1,), (2, 4))
+        _, point = products.row_product("geometric", products.admitted_rows(blades_out, moved, (2, 4)), circles, (2, 4), (3,), (1,))
+        # (K, 3) arrays laid out as the per-chain readout's column gathers lay them out, (3, K) in
+        # memory: numpy's einsum sums a row in an order that depends on the layout
+        normal = (-_dual(plane, 4)[:3]).T
         normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
         radius_sq = -_square(circles, 3) / _square(plane, 4)
-        centre = np.ascontiguousarray(point[:3].T) / (point[4] - point[3])[:, None]  # conformal.down
+        centre = (point[:3] / (point[4] - point[3])[None, :]).T  # conformal.down
         return centre, normal, np.sqrt(radius_sq)
 
     def omega(self) -> np.ndarray:
         """Omega = C dC/dt as bivector rows (10, K) (``CircleRings.omega``'s bivector part)."""
-        return _row_product("geometric", self.blades, self.rates, (3,), (3,), (2,))[1]
+        return products.row_product("geometric", self.blades, self.rates, (3,), (3,), (2,))[1]
 
     def as_multivectors(self) -> tuple[np.ndarray, np.ndarray]:
         """C and dC/dt as (K, 32) multivectors (for tests)."""

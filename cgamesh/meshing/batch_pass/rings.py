@@ -17,11 +17,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.geometry.algebra import products, rotors
 from cgamesh.meshing import normals as normal_field
 from cgamesh.meshing.batch_pass.circle_rows import CircleRows
+from cgamesh.meshing.batch_pass.frames import transported_axes
 from cgamesh.meshing.batch_pass.motions import ChainMotions
-from cgamesh.meshing.circles import (E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION, OUTWARD_TRUST, STATIONARY_FRACTION,
+from cgamesh.meshing.circles import (FOLD_AGREEMENT, NEAR_ZERO_FRACTION, OUTWARD_TRUST, STATIONARY_FRACTION,
                                      RingNormals, fold_screen, frame_values)
 
 
@@ -94,20 +94,6 @@ def _linspace_parameters(spans: np.ndarray, along: np.ndarray) -> tuple[np.ndarr
     return t, chain
 
 
-def _segmented_prefix(steps: np.ndarray, local: np.ndarray) -> np.ndarray:
-    """``rotors.prefix_products(..., unit=True)`` within each chain: element k combines with
-    k - shift only when that lies in its chain, the same products in the same order."""
-    grades = rotors.EUCLIDEAN_ROTOR_BLADES
-    acc = np.array(steps, dtype=np.float64)
-    shift = 1
-    longest = int(local.max()) + 1 if len(local) else 0
-    while shift < longest:
-        target = np.flatnonzero(local >= shift)
-        acc[target] = products.geometric(acc[target], acc[target - shift], grades, grades, grades)
-        shift *= 2
-    return rotors.renormalise(acc, grades)
-
-
 def _padded_rows(first: np.ndarray, count: np.ndarray):
     """Per-chain rows for row-wise numpy reductions, grouped by length class so
     padding stays under 2x: yields (chains, local index grid (c, L) or -1, rows (c, L))."""
@@ -140,18 +126,7 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     # where the normal field is nearly degenerate), and this pass reproduces that path.
     rings = _BladeRings.of(state, o, sc)
 
-    # transported frames (circles.transported_frames, open chains)
-    is_first = ring_local == 0
-    previous = np.where(is_first, 0, np.arange(len(t)) - 1)
-    steps = np.empty((len(t), 32))
-    steps[is_first] = rotors.rotation_between(E3, rings.normal[is_first])
-    rest = ~is_first
-    steps[rest] = rotors.rotation_between(rings.normal[previous[rest]], rings.normal[rest])
-    accumulated = _segmented_prefix(steps, ring_local)
-    u = rotors.apply_to_euclidean(accumulated, np.broadcast_to(E1, rings.normal.shape))
-    u -= np.einsum("ki,ki->k", u, rings.normal)[:, None] * rings.normal
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
-    v = np.cross(rings.normal, u)
+    u, v = transported_axes(rings.normal, ring_local)  # circles.transported_frames, open chains
 
     field = RingNormals.of(rings, u, v)
     stationary = field.speed <= STATIONARY_FRACTION * rings.radius
