@@ -237,24 +237,35 @@ def _against_normals(positions: np.ndarray, normals: np.ndarray, pair: np.ndarra
     """``circles.orient_by_geometry``'s test on the triangles between rings ``pair`` and
     ``pair + 1`` ((R, columns, 3) grids): (S, columns - 1, 2) True where a triangle's geometric
     normal points against the sum of its vertex normals. The corners come from slices of the
-    ring grid instead of gathers by index, in each triangle's own corner order (``swap``: wound
-    the other way), so the cross products and sums are those of orient_by_geometry, bit for bit.
+    ring grid instead of gathers by index, each triangle's normals summed in its own corner
+    order (``swap``: wound the other way, corners (first, third, second)), so the sums are those
+    of orient_by_geometry, bit for bit. A swapped triangle's geometric normal is the other's
+    negated, exactly (cross(c, b) = -cross(b, c) in floating point too), so one cross product
+    serves both windings and the test flips to > 0: no gathers of rows by winding.
     """
     here, there = positions[pair], positions[pair + 1]
     n_here, n_there = normals[pair], normals[pair + 1]
     # (first, second, third) corner of triangle 0 (j, j + 1, j + columns) and 1 (j + 1, j + columns + 1,
-    # j + columns) of each quad; swapped: (first, third, second)
+    # j + columns) of each quad
     corners = [((here[:, :-1], n_here[:, :-1]), (here[:, 1:], n_here[:, 1:]), (there[:, :-1], n_there[:, :-1])),
                ((here[:, 1:], n_here[:, 1:]), (there[:, 1:], n_there[:, 1:]), (there[:, :-1], n_there[:, :-1]))]
     out = np.empty((len(pair), positions.shape[1] - 1, 2), dtype=bool)
+    swapped = swap[:, None, None]
     for kind, (a, b, c) in enumerate(corners):
-        for flipped in (False, True):
-            rows = np.flatnonzero(swap == flipped)
-            if not rows.size:
-                continue
-            first, second, third = (a, c, b) if flipped else (a, b, c)
-            p0 = first[0][rows]
-            geometric = np.cross(second[0][rows] - p0, third[0][rows] - p0).reshape(-1, 3)
-            summed = (first[1][rows] + second[1][rows] + third[1][rows]).reshape(-1, 3)
-            out[rows, :, kind] = (np.einsum("ti,ti->t", geometric, summed) < 0.0).reshape(len(rows), -1)
+        geometric = _cross(b[0] - a[0], c[0] - a[0]).reshape(-1, 3)
+        summed = ((a[1] + np.where(swapped, c[1], b[1])) + np.where(swapped, b[1], c[1])).reshape(-1, 3)
+        dot = np.einsum("ti,ti->t", geometric, summed).reshape(len(pair), -1)
+        out[:, :, kind] = np.where(swap[:, None], dot > 0.0, dot < 0.0)
+    return out
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross(a, b)`` of (..., 3) arrays, its products and differences in its order (so its
+    bits), into one C-ordered output without its copies of the operands."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    scratch = np.empty(out.shape[:-1])
+    for k, (i, j) in enumerate(((1, 2), (2, 0), (0, 1))):  # out_k = a_i b_j - a_j b_i
+        np.multiply(a[..., i], b[..., j], out=out[..., k])
+        np.multiply(a[..., j], b[..., i], out=scratch)
+        np.subtract(out[..., k], scratch, out=out[..., k])
     return out
