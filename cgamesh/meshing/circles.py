@@ -211,8 +211,8 @@ def fold_screen(field: RingNormals, smallest: np.ndarray, theta: np.ndarray) -> 
     can change over one column step, so N may vanish between columns; agreement (K - 1,): the
     mean cosine between consecutive rings' normals at the seven sample angles)."""
     suspicious = smallest <= normal_field.derivative_bound(field.raw) * (theta[1] - theta[0])
-    agreement = np.einsum("ksc,ksc->k", normal_field.unit_rows(field.sample_normals[:-1]),
-                          normal_field.unit_rows(field.sample_normals[1:])) / field.sample_normals.shape[1]
+    unit = normal_field.unit_rows(field.sample_normals)  # each ring's once, for both its pairs
+    agreement = np.einsum("ksc,ksc->k", unit[:-1], unit[1:]) / field.sample_normals.shape[1]
     return suspicious, agreement
 
 

@@ -144,11 +144,11 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     if np.any(suspicious):
         near = np.flatnonzero(suspicious)
         values = frame_values(field.frame[near], theta, field.speed[near])
-        folds = normal_field.reversals(values)
+        unit = normal_field.unit_rows(values)
+        folds = normal_field.unit_reversals(unit)
         fallback |= np.bincount(ring_chain[near[folds.any(axis=1)]], minlength=chains) > 0
         row_of = np.full(len(t), -1)
         row_of[near] = np.arange(len(near))
-        unit = normal_field.unit_rows(values)
         pairs = np.flatnonzero((row_of[:-1] >= 0) & (row_of[1:] >= 0))
         agreement[pairs] = np.einsum("kmc,kmc->k", unit[row_of[pairs]], unit[row_of[pairs + 1]]) / len(theta)
     within = ring_chain[:-1] == ring_chain[1:]
