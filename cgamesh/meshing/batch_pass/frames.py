@@ -55,8 +55,9 @@ def segmented_prefix(steps: np.ndarray, local: np.ndarray) -> np.ndarray:
     shift = 1
     longest = int(local.max()) + 1 if len(local) else 0
     while shift < longest:
-        target = np.flatnonzero(local >= shift)
-        acc[:, target] = _geometric(acc[:, target], acc[:, target - shift])
+        # every element times the one shift before it, kept where that lies in its chain: whole
+        # contiguous slices (the same products) instead of gathers of the elements that combine
+        np.copyto(acc[:, shift:], _geometric(acc[:, shift:], acc[:, :-shift]), where=local[shift:] >= shift)
         shift *= 2
     norm_sq = products.row_product("geometric", acc, acc * _ROTOR_REVERSE, ROTOR, ROTOR, (0,))[1][0]
     return acc / np.sqrt(norm_sq)
