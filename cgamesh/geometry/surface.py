@@ -17,7 +17,7 @@ import numpy as np
 
 from cgamesh.geometry import flatness
 from cgamesh.geometry.algebra import products
-from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
+from cgamesh.geometry.algebra.conformal import E1, E2, E3, E4, E5
 from cgamesh.geometry.algebra.layout import grade_indices
 from cgamesh.geometry.curves import CurveBasis
 from cgamesh.errors import DegenerateGeometryError
@@ -187,22 +187,36 @@ class CircleRings:
         return cls(frame.to_world(centre), normal, frame.scale * radius, omega, frame)
 
     def velocity(self, points: np.ndarray) -> np.ndarray:
-        """World velocity d x / d t (K, S, 3) of world points (K, S, 3) on the circles.
-
-        X' = X . Omega (eq. 20) moves the conformal point X = up(x) without leaving C(t); its
-        weight changes at the rate w' = -X' . n_inf, so the Euclidean velocity is
-        x' = X'_E - w' x (in the local frame, then scaled to world lengths). X . Omega is
-        linear in X: each ring's 5 x 5 matrix is built once and applied to its S points.
-        """
-        local = self.frame.to_local(points)
-        moved = up(local)[..., _VECTORS] @ self._vector_map
-        local_velocity = moved[..., EUCLIDEAN] - weight(moved)[..., None] * local
-        return self.frame.scale * local_velocity
-
-    @cached_property
-    def _vector_map(self) -> np.ndarray:
-        """(K, 5, 32): row j is e_j . Omega_k (a vector), for the vector blades e1..e5."""
-        return products.right_operator("inner", self.omega, (1,), (2,), (1,))[1]
+        """World velocity d x / d t (K, S, 3) of world points (K, S, 3) on the circles."""
+        omega = np.moveaxis(self.omega[..., grade_indices(2)], -1, 0)
+        return self.frame.scale * carried_velocity(omega, self.frame.to_local(points))
 
 
-_VECTORS = grade_indices(1)  # e1, e2, e3 (Euclidean), e4, e5
+def carried_velocity(omega: np.ndarray, local: np.ndarray) -> np.ndarray:
+    """Velocity (K, S, 3) of points local (K, S, 3) carried by the bivectors Omega, given as
+    rows (10, K) of their grade-2 coefficients (layout order).
+
+    X' = X . Omega (eq. 20) moves the conformal point X = up(x) without leaving C(t); its
+    weight changes at the rate w' = -X' . n_inf, so the Euclidean velocity is x' = X'_E - w' x.
+    X . Omega is summed from its twenty non-zero terms (four per vector blade of the result),
+    each a product of a coefficient of up(x) and one of Omega, over every point at once; a
+    5 x 5 matrix per ring applied by a stacked matrix product costs a BLAS call per ring.
+    """
+    _, _, blades_out, terms = products.product_terms("inner", (1,), (2,), (1,))
+    x = [local[..., axis] for axis in range(3)]
+    half_square = 0.5 * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+    vector = [*x, half_square - 0.5, half_square + 0.5]  # e1..e5 of up(x) (conformal.up)
+    bivector = omega[..., None]  # (10, K, 1) against the (K, S) coefficients
+    moved = []
+    for blade_terms in terms:
+        total = None
+        for j, b, positive in blade_terms:
+            term = vector[j] * bivector[b]
+            total = (term if positive else -term) if total is None else (total + term if positive else total - term)
+        moved.append(total)
+    assert tuple(blades_out) == (E1, E2, E3, E4, E5)
+    rate = moved[4] - moved[3]  # -X' . n_inf (conformal.weight)
+    out = np.empty(local.shape)
+    for axis in range(3):
+        np.subtract(moved[axis], rate * x[axis], out=out[..., axis])
+    return out

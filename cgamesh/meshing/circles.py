@@ -211,7 +211,7 @@ def fold_screen(field: RingNormals, smallest: np.ndarray, theta: np.ndarray) -> 
     can change over one column step, so N may vanish between columns; agreement (K - 1,): the
     mean cosine between consecutive rings' normals at the seven sample angles)."""
     suspicious = smallest <= normal_field.derivative_bound(field.raw) * (theta[1] - theta[0])
-    unit = normal_field.unit_rows(field.sample_normals)  # row by row: each ring's once, not twice
+    unit = normal_field.unit_rows(field.sample_normals)  # each ring's once, for both its pairs
     agreement = np.einsum("ksc,ksc->k", unit[:-1], unit[1:]) / field.sample_normals.shape[1]
     return suspicious, agreement
 

@@ -237,7 +237,11 @@ def reversals(values: np.ndarray) -> np.ndarray:
     values: (R, M, 2) normal coordinates (zeta, rho). Neighbouring normals of a smooth field
     differ by small angles, so a negative dot product means the raw field passed near zero.
     """
-    unit = unit_rows(values)
+    return unit_reversals(unit_rows(values))
+
+
+def unit_reversals(unit: np.ndarray) -> np.ndarray:
+    """``reversals`` of values already scaled by ``unit_rows`` (a caller that needs both)."""
     return np.einsum("kmc,kmc->km", unit[:, :-1], unit[:, 1:]) < 0.0
 
 

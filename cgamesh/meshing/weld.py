@@ -9,17 +9,18 @@ import numpy as np
 _MIX = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xC2B2AE3D27D4EB4F), np.uint64(0x165667B19E3779F9))
 
 
-_BLOCK = 1 << 18  # repeated vertices checked at a time
+_BLOCK = 1 << 18  # vertices compared with their candidates at a time
 
 
 def weld_by_position(positions: np.ndarray) -> np.ndarray:
     """(V,) index of the first vertex at each bit-identical position (positions (V, 3)).
 
     One 64-bit hash per vertex of its coordinates' bit patterns, sorted with the vertex index in
-    its low bits (so a run of equal hashes lists its vertices in index order); a run whose rows all equal its first row welds to it, and the few runs that do
-    not (hash collisions) are resolved by an exact sort of their rows alone. One sort of 64-bit
-    integers instead of 24-byte rows: several times faster on a tractogram's millions of
-    vertices, with the same answer.
+    its low bits (so a run of equal hashes lists its vertices in index order); a vertex whose
+    row equals its run's first row welds to it, and the few runs where one does not (hash
+    collisions) are resolved by an exact sort of their rows alone. One sort of 64-bit integers
+    instead of 24-byte rows: several times faster on a tractogram's millions of vertices, with
+    the same answer.
     """
     positions = np.asarray(positions, dtype=np.float64)
     count = positions.shape[0]
@@ -48,28 +49,35 @@ def weld_by_position(positions: np.ndarray) -> np.ndarray:
     hashed.sort()
     order = np.bitwise_and(hashed, low, out=scratch).view(np.int64)
     sorted_hash = np.right_shift(hashed, np.uint64(bits), out=hashed)
-    repeat = np.flatnonzero(sorted_hash[1:] == sorted_hash[:-1]) + 1  # sorted slots equal to the slot before
+    opens = np.empty(count, dtype=bool)  # sorted slots that start a run of equal hashes
+    opens[0] = True
+    np.not_equal(sorted_hash[1:], sorted_hash[:-1], out=opens[1:])
     del sorted_hash, hashed
-    if not repeat.size:
+    if opens.all():
         return weld
-    # the first slot of each run of equal hashes, for every repeated slot
-    opens = np.ones(repeat.size, dtype=bool)
-    opens[1:] = repeat[1:] != repeat[:-1] + 1
-    run_start = np.maximum.accumulate(np.where(opens, repeat - 1, 0))
+    # every vertex's candidate: the first vertex of its run (itself when alone), written back in
+    # vertex order, so the rows are compared in vertex order against candidates that are mostly
+    # near (a seam's first column, an earlier copy of the same streamline): gathers in hash order
+    # jump through the whole array, a cache miss per row
+    slot = np.arange(count)
+    run_start = np.maximum.accumulate(np.where(opens, slot, 0), out=slot)
+    candidate = np.empty(count, dtype=np.int64)
+    candidate[order] = order[run_start]
+    del slot, run_start, order
+    repeated = np.flatnonzero(candidate != np.arange(count))  # in vertex order
     colliding = []
-    for block in range(0, repeat.size, _BLOCK):  # rows compared a block at a time (an input of
-        # many coincident copies repeats nearly every vertex)
-        starts = run_start[block:block + _BLOCK]
-        members, heads = order[repeat[block:block + _BLOCK]], order[starts]
+    for block in range(0, repeated.size, _BLOCK):  # rows compared a block at a time
+        members = repeated[block:block + _BLOCK]
+        heads = candidate[members]
         # equal as numbers (so -0.0 is 0.0); a NaN never is, and its run is settled exactly below
         equal = np.take(positions, members, axis=0) == np.take(positions, heads, axis=0)
         same = equal[:, 0] & equal[:, 1] & equal[:, 2]
         weld[members[same]] = heads[same]
-        colliding.append(np.unique(starts[~same]))
-    runs = np.unique(np.concatenate(colliding))
-    if runs.size:  # a collision: an exact weld over every vertex of the colliding runs
-        in_run = np.isin(run_start, runs)
-        rows = np.unique(np.concatenate([order[runs], order[repeat[in_run]]]))
+        colliding.append(members[~same])
+    differing = np.concatenate(colliding)
+    if differing.size:  # a collision: an exact weld over every vertex of the colliding runs
+        heads = np.unique(candidate[differing])
+        rows = np.flatnonzero(np.isin(candidate, heads))
         keys = np.ascontiguousarray(_bits(positions[rows])).view(np.dtype((np.void, 24))).ravel()
         _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
         weld[rows] = rows[first[inverse.ravel()]]

@@ -7,9 +7,10 @@ circle is grade 3, a rotor grades 0, 2, 4), and the matrix for that pattern is b
 and cached: a circle times a circle is a 100-column product, not 1024, with no
 per-element Python. Where an operand lives in a smaller subspace than whole grades (a
 Euclidean rotation rotor: 1, e12, e13, e23), callers may name its blades instead
-(``Blades``): a product of two such rotors is then 16 columns, not 121. Where the operands
-carry many blades (circles, duals), the same sums are formed one operand blade at a time
-instead of through the mostly-zero matrix (``_sparse_steps``): 2-5x faster, the same bits.
+(``Blades``): a product of two such rotors is then 16 columns, not 121. On a batch (one
+axis of two rows or more) the same sums are formed one non-zero term at a time, as whole-row
+multiplies and adds over the batch (``_term_lists``), instead of through the mostly-zero
+matrix: 4-25x faster on circles, the same bits.
 """
 
 from __future__ import annotations
@@ -31,9 +32,9 @@ from cgamesh.geometry.algebra.layout import (
 )
 
 ALL_GRADES = (0, 1, 2, 3, 4, 5)
-# Batches from this many rows are summed blade by blade (``_sparse_steps``), smaller ones
-# through the matrix: the same bits either way (tests/test_products_sparse.py), and the
-# crossover in time lies between 50 and 500 rows.
+# Batches from this many rows are summed term by term (``_term_lists``), smaller ones through
+# the matrix (``rows_times``: a lone row multiplied as two, as a batch sums it): the same bits
+# either way (tests/test_products_sparse.py), and the crossover in time lies between 50 and 500 rows.
 SPARSE_MIN_ROWS = 128
 _SIGN_TABLES = {"geometric": GEOMETRIC_SIGN, "outer": OUTER_SIGN, "inner": INNER_SIGN}
 
@@ -77,27 +78,26 @@ def _bilinear_map(kind: str, grades_a: tuple, grades_b: tuple, grades_out: tuple
 
 
 @lru_cache(maxsize=None)
-def _sparse_steps(kind: str, grades_a: tuple, grades_b: tuple, grades_out: tuple):
-    """The product as one step per blade i of a: the result columns ks gain a_i * (signs * b_js).
+def _term_lists(kind: str, grades_a: tuple, grades_b: tuple, grades_out: tuple):
+    """The product as sums of signed blade-pair products: for each result blade (index into
+    blades_out), its terms (i, j, positive) meaning +-a_i b_j, in the matrix's row order.
 
     Each pair of blades makes one blade, so the sign-and-placement matrix has one non-zero per
-    row; summing its terms in row order from zero is what the matrix product does (a zero
-    entry adds nothing), so both ways agree bit for bit on a batch of two rows or more along
-    one axis, up to 256 blade pairs (measured against numpy's and OpenBLAS's products).
-    Returns None where the dense matrix product is the faster (few blade pairs and several
-    result blades: small rotors, vectors).
+    row and entries +-1: its product sums, for each result blade, the rounded a_i b_j of its rows
+    in row order from zero, and so does adding the terms one at a time (a zero entry adds nothing,
+    a +-1 factor rounds nothing). Both agree bit for bit on a batch of two rows or more along one
+    axis, up to 256 blade pairs (measured against numpy's and OpenBLAS's products; past 256 pairs
+    the matrix product sums in blocks, another order: None).
     """
     blades_a, blades_b, blades_out, matrix = _bilinear_map(kind, grades_a, grades_b, grades_out)
-    pairs = blades_a.size * blades_b.size
-    if (pairs <= 25 and blades_out.size > 1) or pairs > 256:
-        return None  # (past 256 pairs the matrix product sums in blocks: another order)
-    per_a = matrix.reshape(blades_a.size, blades_b.size, -1)
-    steps = []
-    for i in range(blades_a.size):
-        js, ks = np.nonzero(per_a[i])
-        if js.size:
-            steps.append((i, js, ks, per_a[i][js, ks][:, None]))
-    return tuple(steps)
+    if blades_a.size * blades_b.size > 256 or not blades_out.size:
+        return None
+    lists = []
+    for k in range(blades_out.size):
+        rows = np.flatnonzero(matrix[:, k])
+        lists.append(tuple((int(r // blades_b.size), int(r % blades_b.size), bool(matrix[r, k] > 0.0))
+                           for r in rows))
+    return tuple(lists)
 
 
 @lru_cache(maxsize=None)
@@ -107,10 +107,62 @@ def _single_blade_columns(kind: str, grades_a: tuple, grades_b: tuple, grades_ou
     blades_a, _, blades_out, _ = _bilinear_map(kind, grades_a, grades_b, grades_out)
     source = np.zeros(BLADE_COUNT, dtype=np.int64)
     factor = np.zeros(BLADE_COUNT)
-    for i, _, ks, signs in _sparse_steps(kind, grades_a, grades_b, grades_out):
-        source[blades_out[ks]] = blades_a[i]
-        factor[blades_out[ks]] = signs[:, 0]
+    for k, terms in enumerate(_term_lists(kind, grades_a, grades_b, grades_out)):
+        for i, _, positive in terms:  # one term per result blade: b has one blade
+            source[blades_out[k]] = blades_a[i]
+            factor[blades_out[k]] = 1.0 if positive else -1.0
     return source, factor
+
+
+def _summed_rows(terms, left, right, rows: int) -> np.ndarray:
+    """(O, rows): each result blade's ``_term_lists`` terms summed one at a time from zero, from
+    operand rows left (A, rows) and right (B, rows) (a row may be a scalar broadcast along the
+    batch): whole-row multiplies and adds into preallocated rows, no gathers."""
+    summed = np.empty((len(terms), rows))
+    scratch = np.empty(rows)
+    for k, blade_terms in enumerate(terms):
+        out = summed[k]
+        if not blade_terms:
+            out.fill(0.0)
+            continue
+        i, j, positive = blade_terms[0]
+        np.multiply(left[i], right[j], out=out)
+        # 0 + term (or 0 - term), as the sum from zero: -0.0 becomes 0.0
+        if positive:
+            np.add(out, 0.0, out=out)
+        else:
+            np.subtract(0.0, out, out=out)
+        for i, j, positive in blade_terms[1:]:
+            np.multiply(left[i], right[j], out=scratch)
+            if positive:
+                np.add(out, scratch, out=out)
+            else:
+                np.subtract(out, scratch, out=out)
+    return summed
+
+
+def row_product(kind: str, left: np.ndarray, right: np.ndarray, grades_a: Sequence[int], grades_b: Sequence[int],
+                grades_out: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+    """A product of operands stored blade-major: left (A, K) the coefficients of the blades
+    ``grades_a`` admits (layout order), one row per blade (a row of shape (1,) is a constant),
+    right (B, K) likewise. Returns (blades_out, (O, K) rows): the same sums, so the same bits,
+    as the (..., 32) products on a batch, without a (K, 32) array or a gather of its columns.
+    At most 256 blade pairs."""
+    blades_a, blades_b, blades_out, terms = product_terms(kind, grades_a, grades_b, grades_out)
+    if terms is None:
+        raise ValueError(f"row_product takes at most 256 blade pairs, got {blades_a.size * blades_b.size}")
+    return blades_out, _summed_rows(terms, left, right, max(np.shape(left)[-1], np.shape(right)[-1]))
+
+
+def admitted_rows(blades: np.ndarray, rows: np.ndarray, grades: Sequence[int]) -> np.ndarray:
+    """Rows of every blade ``grades`` admits from rows (len(blades), K) of ``blades`` (zero where
+    ``blades`` has none; rows of blades it does not admit are dropped), as a product's result
+    becomes the operand of the next."""
+    admitted = np.flatnonzero(_mask(_selection(grades)))
+    full = np.zeros((admitted.size, rows.shape[1]))
+    present = np.isin(blades, admitted)
+    full[np.searchsorted(admitted, blades[present])] = rows[present]
+    return full
 
 
 def _product(kind, a, b, grades_a, grades_b, grades_out):
@@ -119,27 +171,25 @@ def _product(kind, a, b, grades_a, grades_b, grades_out):
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
     shape = np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
-    # one batch axis of SPARSE_MIN_ROWS rows or more: there the matrix product sums row by row
-    # in order, and the blade-by-blade sums (a few whole-row operations per blade) are faster;
-    # below it the one matrix product is (4-5x on a few rows: a tiny input's fixed cost)
-    steps = (_sparse_steps(kind, *selections) if blades_out.size and len(shape) == 1 and shape[0] >= SPARSE_MIN_ROWS
-             else None)
-    if steps is not None and blades_b.size == 1:
+    # one batch axis of SPARSE_MIN_ROWS rows or more: the terms summed one at a time, faster
+    # there; below it the one matrix product (4-5x faster on a few rows: a tiny input's fixed
+    # cost), which sums every row's terms in the same order (rows_times: a lone row too)
+    terms = _term_lists(kind, *selections) if len(shape) == 1 and shape[0] >= SPARSE_MIN_ROWS else None
+    if terms is not None and blades_b.size == 1:
         # a times one blade (a dual): each result blade takes one term, a signed column of a
         # (0.0 + term, as the sums from zero give: -0.0 becomes 0.0); np.take, several times
         # faster than indexing columns with an index array
         source, factor = _single_blade_columns(kind, *selections)
         coefficient = np.broadcast_to(b[..., blades_b[0]], shape)[:, None]
         return np.take(np.broadcast_to(a, shape + (BLADE_COUNT,)), source, axis=-1) * (coefficient * factor) + 0.0
-    if steps is not None:
-        # one row per blade, the batch along it: each step is a few whole-row operations
-        rows = shape[0]
-        left = np.take(np.broadcast_to(a, shape + (BLADE_COUNT,)), blades_a, axis=-1).T
-        right = np.take(np.broadcast_to(b, shape + (BLADE_COUNT,)), blades_b, axis=-1).T
-        result = np.zeros((BLADE_COUNT, rows))
-        for i, js, ks, signs in steps:
-            result[blades_out[ks]] += left[i] * (right[js] * signs)
-        return np.ascontiguousarray(result.T)
+    if terms is not None:
+        # operands blade-major, each blade a contiguous row (a constant operand: a row of scalars);
+        # rows strided through the (rows, 32) layout would make every term several times slower
+        left = np.moveaxis(a, -1, 0)[blades_a]
+        right = np.moveaxis(b, -1, 0)[blades_b]
+        out = np.zeros(shape + (BLADE_COUNT,))
+        out[:, blades_out] = _summed_rows(terms, left, right, shape[0]).T  # only the result's blades cross back
+        return out
     out = np.zeros(shape + (BLADE_COUNT,))
     if blades_out.size:
         left = a[..., blades_a][..., :, None]
@@ -148,6 +198,15 @@ def _product(kind, a, b, grades_a, grades_b, grades_out):
         out[..., blades_out] = rows_times(pairs, matrix)
     return out
 
+
+def product_terms(kind: str, grades_a: Sequence[int], grades_b: Sequence[int], grades_out: Sequence[int]):
+    """(blades_a, blades_b, blades_out, terms) of a product restricted to grades (or ``Blades``):
+    terms[k] lists result blade blades_out[k]'s terms (i, j, positive), +-a[blades_a[i]] b[blades_b[j]],
+    in the order the batched products sum them; for callers that form a product's few terms
+    themselves (operands not stored as (..., 32) multivectors). None past 256 blade pairs."""
+    selections = _selection(grades_a), _selection(grades_b), _selection(grades_out)
+    blades_a, blades_b, blades_out, _ = _bilinear_map(kind, *selections)
+    return blades_a, blades_b, blades_out, _term_lists(kind, *selections)
 
 
 def right_operator(kind: str, b, grades_a: Sequence[int], grades_b: Sequence[int] = ALL_GRADES,

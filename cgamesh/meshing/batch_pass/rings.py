@@ -17,10 +17,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.geometry.algebra import products, rotors
 from cgamesh.meshing import normals as normal_field
+from cgamesh.meshing.batch_pass.circle_rows import CircleRows
+from cgamesh.meshing.batch_pass.frames import transported_axes
 from cgamesh.meshing.batch_pass.motions import ChainMotions
-from cgamesh.meshing.circles import (E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION, OUTWARD_TRUST, STATIONARY_FRACTION,
+from cgamesh.meshing.circles import (FOLD_AGREEMENT, NEAR_ZERO_FRACTION, OUTWARD_TRUST, STATIONARY_FRACTION,
                                      RingNormals, fold_screen, frame_values)
 
 
@@ -40,35 +41,25 @@ class _BladeRings:
     centre: np.ndarray
     normal: np.ndarray
     radius: np.ndarray
-    omega: np.ndarray
+    omega: np.ndarray  # (10, K) bivector rows (circle_rows)
     origin: np.ndarray
     scale: np.ndarray
 
     @classmethod
     def of(cls, state, origin, scale) -> "_BladeRings":
-        from cgamesh.geometry.motor_surface import circle_blades_and_rates
-        from cgamesh.geometry.objects import circle_euclidean
-
-        blades, derivatives = circle_blades_and_rates(state)
-        centre, normal, radius = circle_euclidean(blades)
-        omega = products.geometric(blades, derivatives, (3,), (3,), (2,))
-        return cls(origin + scale[:, None] * centre, normal, scale * radius, omega, origin, scale)
+        circles = CircleRows.of(state)
+        centre, normal, radius = circles.euclidean()
+        return cls(origin + scale[:, None] * centre, normal, scale * radius, circles.omega(), origin, scale)
 
     @property
     def frame(self) -> _RingFrames:
         return _RingFrames(self.scale[:, None, None])
 
     def velocity(self, points: np.ndarray) -> np.ndarray:
-        from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
-        from cgamesh.geometry.algebra.layout import grade_indices
+        from cgamesh.geometry.surface import carried_velocity
 
         scale = self.scale[:, None, None]
-        local = (points - self.origin[:, None, :]) / scale
-        vector_map = products.right_operator("inner", self.omega, (1,), (2,), (1,))[1]
-        moved = up(local)[..., grade_indices(1)] @ vector_map
-        local_velocity = moved[..., EUCLIDEAN] - weight(moved)[..., None] * local
-        return scale * local_velocity
-
+        return scale * carried_velocity(self.omega, (points - self.origin[:, None, :]) / scale)
 
 
 @dataclass(frozen=True)
@@ -103,20 +94,6 @@ def _linspace_parameters(spans: np.ndarray, along: np.ndarray) -> tuple[np.ndarr
     return t, chain
 
 
-def _segmented_prefix(steps: np.ndarray, local: np.ndarray) -> np.ndarray:
-    """``rotors.prefix_products(..., unit=True)`` within each chain: element k combines with
-    k - shift only when that lies in its chain, the same products in the same order."""
-    grades = rotors.EUCLIDEAN_ROTOR_BLADES
-    acc = np.array(steps, dtype=np.float64)
-    shift = 1
-    longest = int(local.max()) + 1 if len(local) else 0
-    while shift < longest:
-        target = np.flatnonzero(local >= shift)
-        acc[target] = products.geometric(acc[target], acc[target - shift], grades, grades, grades)
-        shift *= 2
-    return rotors.renormalise(acc, grades)
-
-
 def _padded_rows(first: np.ndarray, count: np.ndarray):
     """Per-chain rows for row-wise numpy reductions, grouped by length class so
     padding stays under 2x: yields (chains, local index grid (c, L) or -1, rows (c, L))."""
@@ -149,18 +126,7 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     # where the normal field is nearly degenerate), and this pass reproduces that path.
     rings = _BladeRings.of(state, o, sc)
 
-    # transported frames (circles.transported_frames, open chains)
-    is_first = ring_local == 0
-    previous = np.where(is_first, 0, np.arange(len(t)) - 1)
-    steps = np.empty((len(t), 32))
-    steps[is_first] = rotors.rotation_between(E3, rings.normal[is_first])
-    rest = ~is_first
-    steps[rest] = rotors.rotation_between(rings.normal[previous[rest]], rings.normal[rest])
-    accumulated = _segmented_prefix(steps, ring_local)
-    u = rotors.apply_to_euclidean(accumulated, np.broadcast_to(E1, rings.normal.shape))
-    u -= np.einsum("ki,ki->k", u, rings.normal)[:, None] * rings.normal
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
-    v = np.cross(rings.normal, u)
+    u, v = transported_axes(rings.normal, ring_local)  # circles.transported_frames, open chains
 
     field = RingNormals.of(rings, u, v)
     stationary = field.speed <= STATIONARY_FRACTION * rings.radius
@@ -178,11 +144,11 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     if np.any(suspicious):
         near = np.flatnonzero(suspicious)
         values = frame_values(field.frame[near], theta, field.speed[near])
-        folds = normal_field.reversals(values)
+        unit = normal_field.unit_rows(values)
+        folds = normal_field.unit_reversals(unit)
         fallback |= np.bincount(ring_chain[near[folds.any(axis=1)]], minlength=chains) > 0
         row_of = np.full(len(t), -1)
         row_of[near] = np.arange(len(near))
-        unit = normal_field.unit_rows(values)
         pairs = np.flatnonzero((row_of[:-1] >= 0) & (row_of[1:] >= 0))
         agreement[pairs] = np.einsum("kmc,kmc->k", unit[row_of[pairs]], unit[row_of[pairs + 1]]) / len(theta)
     within = ring_chain[:-1] == ring_chain[1:]
@@ -271,24 +237,35 @@ def _against_normals(positions: np.ndarray, normals: np.ndarray, pair: np.ndarra
     """``circles.orient_by_geometry``'s test on the triangles between rings ``pair`` and
     ``pair + 1`` ((R, columns, 3) grids): (S, columns - 1, 2) True where a triangle's geometric
     normal points against the sum of its vertex normals. The corners come from slices of the
-    ring grid instead of gathers by index, in each triangle's own corner order (``swap``: wound
-    the other way), so the cross products and sums are those of orient_by_geometry, bit for bit.
+    ring grid instead of gathers by index, each triangle's normals summed in its own corner
+    order (``swap``: wound the other way, corners (first, third, second)), so the sums are those
+    of orient_by_geometry, bit for bit. A swapped triangle's geometric normal is the other's
+    negated, exactly (cross(c, b) = -cross(b, c) in floating point too), so one cross product
+    serves both windings and the test flips to > 0: no gathers of rows by winding.
     """
     here, there = positions[pair], positions[pair + 1]
     n_here, n_there = normals[pair], normals[pair + 1]
     # (first, second, third) corner of triangle 0 (j, j + 1, j + columns) and 1 (j + 1, j + columns + 1,
-    # j + columns) of each quad; swapped: (first, third, second)
+    # j + columns) of each quad
     corners = [((here[:, :-1], n_here[:, :-1]), (here[:, 1:], n_here[:, 1:]), (there[:, :-1], n_there[:, :-1])),
                ((here[:, 1:], n_here[:, 1:]), (there[:, 1:], n_there[:, 1:]), (there[:, :-1], n_there[:, :-1]))]
     out = np.empty((len(pair), positions.shape[1] - 1, 2), dtype=bool)
+    swapped = swap[:, None, None]
     for kind, (a, b, c) in enumerate(corners):
-        for flipped in (False, True):
-            rows = np.flatnonzero(swap == flipped)
-            if not rows.size:
-                continue
-            first, second, third = (a, c, b) if flipped else (a, b, c)
-            p0 = first[0][rows]
-            geometric = np.cross(second[0][rows] - p0, third[0][rows] - p0).reshape(-1, 3)
-            summed = (first[1][rows] + second[1][rows] + third[1][rows]).reshape(-1, 3)
-            out[rows, :, kind] = (np.einsum("ti,ti->t", geometric, summed) < 0.0).reshape(len(rows), -1)
+        geometric = _cross(b[0] - a[0], c[0] - a[0]).reshape(-1, 3)
+        summed = ((a[1] + np.where(swapped, c[1], b[1])) + np.where(swapped, b[1], c[1])).reshape(-1, 3)
+        dot = np.einsum("ti,ti->t", geometric, summed).reshape(len(pair), -1)
+        out[:, :, kind] = np.where(swap[:, None], dot > 0.0, dot < 0.0)
+    return out
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross(a, b)`` of (..., 3) arrays, its products and differences in its order (so its
+    bits), into one C-ordered output without its copies of the operands."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    scratch = np.empty(out.shape[:-1])
+    for k, (i, j) in enumerate(((1, 2), (2, 0), (0, 1))):  # out_k = a_i b_j - a_j b_i
+        np.multiply(a[..., i], b[..., j], out=out[..., k])
+        np.multiply(a[..., j], b[..., i], out=scratch)
+        np.subtract(out[..., k], scratch, out=out[..., k])
     return out
