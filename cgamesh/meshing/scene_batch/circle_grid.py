@@ -24,17 +24,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from cgamesh.geometry.algebra import rotors
-from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
 from cgamesh.geometry.algebra.layout import grade_indices
 from cgamesh.geometry.algebra import products
 from cgamesh.geometry.objects import circle_euclidean
+from cgamesh.geometry.surface import carried_velocity
 from cgamesh.meshing import normals as normal_field
 from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION,
                                      OUTWARD_TRUST, STATIONARY_FRACTION, STATIONARY_OFFSET, _grid_weld, _wound_grid,
                                      _add_cap, drop_zero_area, frame_values)
 from cgamesh.meshing.mesh import SurfaceMesh
 
-_VECTORS = grade_indices(1)
 # An outward estimate or sum this close (relative) to its decision threshold is recomputed the
 # per-surface way, whose summation order may differ from the batched one in the last bits.
 _DECISION_MARGIN = 1e-9
@@ -85,11 +84,9 @@ def _ring_fields(centre, normal, radius, omega, u, v, row_origin, row_scale):
     scale (R,)): the sample points and radial directions (R, 7, 3), velocities, normal samples,
     speeds (R,), and the (zeta, rho) and normal fits (R, 7, 2), (R, 7, 3)."""
     points, radial = normal_field.sample_points(centre, radius, u, v)
-    vector_map = products.right_operator("inner", omega, (1,), (2,), (1,))[1]
     local = (points - row_origin[:, None, :]) / row_scale[:, None, None]
-    moved = up(local)[..., _VECTORS] @ vector_map
-    velocity = (row_scale[:, None, None] * (moved[..., EUCLIDEAN] - weight(moved)[..., None] * local)
-                ) / row_scale[:, None, None]
+    omega_rows = np.moveaxis(omega[..., grade_indices(2)], -1, 0)  # as CircleRings.velocity takes them
+    velocity = (row_scale[:, None, None] * carried_velocity(omega_rows, local)) / row_scale[:, None, None]
     zeta_rho = normal_field.frame_coordinates(velocity, radial, normal)
     sampled = normal_field.normal_samples(zeta_rho, radial, normal)
     speed = np.linalg.norm(velocity, axis=-1).max(axis=1)
