@@ -158,11 +158,20 @@ def admitted_rows(blades: np.ndarray, rows: np.ndarray, grades: Sequence[int]) -
     """Rows of every blade ``grades`` admits from rows (len(blades), K) of ``blades`` (zero where
     ``blades`` has none; rows of blades it does not admit are dropped), as a product's result
     becomes the operand of the next."""
-    admitted = np.flatnonzero(_mask(_selection(grades)))
-    full = np.zeros((admitted.size, rows.shape[1]))
-    present = np.isin(blades, admitted)
-    full[np.searchsorted(admitted, blades[present])] = rows[present]
+    size, target, source = _admission(tuple(int(b) for b in blades), _selection(grades))
+    full = np.zeros((size, rows.shape[1]))
+    full[target] = rows[source]
     return full
+
+
+@lru_cache(maxsize=None)
+def _admission(blades: tuple[int, ...], selection) -> tuple[int, np.ndarray, np.ndarray]:
+    """admitted_rows' placement, once per (blades, grades): the admitted blade count, and which
+    row of the result (target) each admitted row of ``blades`` (source) fills."""
+    admitted = np.flatnonzero(_mask(selection))
+    blades = np.asarray(blades, dtype=np.int64)
+    source = np.flatnonzero(np.isin(blades, admitted))
+    return admitted.size, np.searchsorted(admitted, blades[source]), source
 
 
 def _product(kind, a, b, grades_a, grades_b, grades_out):
