@@ -86,7 +86,7 @@ def test_every_example_meshes_the_same_batched(path, resolution):
         assert_alike(*mesh_both(scene, resolution, tangents))
 
 
-def test_the_examples_blade_circles_go_through_the_batched_pass():
+def test_the_examples_blade_surfaces_go_through_the_batched_pass():
     taken = {}
     for path in EXAMPLES:
         scene = load_scene(path, rendering=False)
@@ -96,7 +96,8 @@ def test_the_examples_blade_circles_go_through_the_batched_pass():
     assert taken["fig14_bezier_orders"] == 4 and taken["closed_loop"] == 1
     assert taken["kb_tube"] == taken["rational_tube"] == 1  # with caps
     assert taken["motor_tube"] == 2  # motor interpolation
-    assert taken["fig10_cubic_pairs"] == taken["ribbon_loop"] == 0  # ribbons: per surface
+    assert taken["fig10_cubic_pairs"] == taken["fig10_linear_pairs"] == taken["ribbon_loop"] == 1  # ribbons
+    assert taken["fig10_quadratic_pairs"] == taken["traced_fig11_point_pairs"] == 1
 
 
 def random_tube_scene(count: int, controls: int, interpolation: str = "blade"):
