@@ -7,7 +7,9 @@ which meshes each surface alone. Checked on every example scene (its own resolut
 benchmark's, whose low vertex counts around put nearly every ring on the fold path), and on
 random scenes of several surfaces sharing and not sharing a shape of work (every curve kind,
 blade and motor interpolation, open and closed, with caps or not, aligned or not, orientations on
-the exact axes, sizes from 1e-3 to 1e3, far from the origin, through circles, repeated controls).
+the exact axes, sizes from 1e-3 to 1e3, far from the origin, through circles, repeated controls;
+point-pair ribbons among them, blade interpolated, 2 to 16 vertices across), and on scenes of
+random ribbons (the benchmark's).
 Where the per-surface path refuses a scene, the batched path refuses it with the same message.
 """
 
@@ -119,6 +121,42 @@ def test_random_tubes_mesh_the_same_batched_and_nearly_all_are_batched(controls,
     assert batched_count(scene) >= 0.9 * len(scene.surfaces)
 
 
+def random_ribbon_scene(count: int, controls: int):
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from bench_scene_batch import ribbon_document
+
+    return parse_scene(ribbon_document(count, controls), "ribbons.yaml")
+
+
+@pytest.mark.parametrize("controls", [2, 3, 5])
+def test_random_ribbons_mesh_the_same_batched_and_all_are_batched(controls):
+    scene = random_ribbon_scene(60, controls)
+    alone, batched = mesh_both(scene)
+    assert_same_meshes(alone, batched)
+    assert batched_count(scene) == len(scene.surfaces)
+    resolution = Resolution(2, 7)  # two vertices across: the rulings alone
+    alone, batched = mesh_both(scene, resolution)
+    assert_same_meshes(alone, batched)
+    assert batched_count(scene, resolution) == len(scene.surfaces)
+
+
+def test_a_ribbon_refusal_is_the_per_surface_paths():
+    """A ribbon whose controls are opposite (align: false) has no projection between them: the
+    batched pass leaves it, and the per-surface path refuses it with its place in the file; its
+    neighbour in the same shape of work is still batched."""
+    text = ("cgamesh: 1\nsurfaces:\n"
+            "  - name: fine\n    type: point_pairs\n    curve: linear\n    controls:\n"
+            "      - {a: [0, 0, 0], b: [1, 0, 0]}\n      - {a: [0, 1, 0], b: [1, 1, 0.5]}\n"
+            "  - name: opposite\n    type: point_pairs\n    curve: linear\n    align: false\n    controls:\n"
+            "      - {a: [0, 0, 0], b: [1, 0, 0]}\n      - {a: [1, 1, 0], b: [0, 1, 0]}\n")
+    scene = parse_scene(text, "two.yaml")
+    alone, batched = mesh_both(scene)
+    assert isinstance(alone, CgameshError) and type(alone) is type(batched) and str(alone) == str(batched)
+    assert "two.yaml" in str(alone) and "opposite" in str(alone)
+    share = _batched_share(scene.surfaces, Resolution(), False)
+    assert share.mesh(0) is not None and share.mesh(1) is None
+
+
 def test_a_refusal_is_the_per_surface_paths():
     text = ("cgamesh: 1\nsurfaces:\n"
             "  - name: fine\n    type: circles\n    curve: linear\n    controls:\n"
@@ -149,12 +187,18 @@ def shapes(draw):
     around = draw(st.sampled_from((3, 4, 8, 16)))
     along = draw(st.sampled_from((2, 3, 9, 40)))
     interpolation = draw(st.sampled_from(("blade", "blade", "motor")))
-    return curve, closed, count, tbc, around, along, interpolation
+    kind = draw(st.sampled_from(("circles", "circles", "point_pairs")))
+    if kind == "point_pairs":
+        interpolation = "blade"  # a point pair has no motor interpolation
+        around = draw(st.sampled_from((2, 3, 8, 16)))
+    return curve, closed, count, tbc, around, along, interpolation, kind
 
 
 @st.composite
 def surfaces(draw, shape, name):
-    curve, closed, count, tbc, around, along, interpolation = shape
+    if shape[-1] == "point_pairs":
+        return draw(ribbons(shape, name))
+    curve, closed, count, tbc, around, along, interpolation, _ = shape
     scale = 10.0 ** draw(st.integers(-3, 3))
     offset = np.array(draw(st.tuples(coordinate, coordinate, coordinate))) * 10.0 ** draw(st.integers(0, 4))
     step = np.array(draw(direction))
@@ -186,8 +230,35 @@ def surfaces(draw, shape, name):
 
 
 @st.composite
+def ribbons(draw, shape, name):
+    """A point-pair surface: pairs about a random walk, their directions on the exact axes or
+    anywhere, turning from control to control (sometimes against the previous one)."""
+    curve, closed, count, tbc, around, along, _, _ = shape
+    scale = 10.0 ** draw(st.integers(-3, 3))
+    point = np.array(draw(st.tuples(coordinate, coordinate, coordinate))) * 10.0 ** draw(st.integers(0, 4))
+    step = np.array(draw(direction))
+    lines = []
+    for _ in range(count):
+        weight = f", weight: {10.0 ** draw(st.floats(-1.0, 1.0))!r}" if curve == "rational_bezier" else ""
+        across = np.array(draw(direction))
+        half = scale * draw(st.floats(0.2, 1.0))
+        a, b = point - half * across, point + half * across
+        lines.append(f"{{a: {a.tolist()}, b: {b.tolist()}{weight}}}")
+        step = step + 0.5 * np.array(draw(sphere_direction))
+        point = point + scale * draw(st.floats(0.3, 1.5)) * step / max(np.linalg.norm(step), 1e-3)
+    if draw(st.integers(0, 4)) == 0:  # a repeated control
+        lines.insert(1, lines[0])
+    kb = f"    tension: {tbc[0]}\n    bias: {tbc[1]}\n    continuity: {tbc[2]}\n" if tbc else ""
+    align = draw(st.sampled_from(("true", "true", "false")))
+    return (f"  - name: {name}\n    type: point_pairs\n    curve: {curve}\n{kb}"
+            f"    closed: {str(closed).lower()}\n    align: {align}\n"
+            f"    resolution: {{around: {around}, along: {along}}}\n    controls:\n"
+            + "".join(f"      - {line}\n" for line in lines))
+
+
+@st.composite
 def scenes(draw):
-    """Scenes of 2 to 6 circle surfaces, most sharing one shape of work."""
+    """Scenes of 2 to 6 circle or point-pair surfaces, most sharing one shape of work."""
     common = draw(shapes())
     count = draw(st.integers(2, 6))
     bodies = [draw(surfaces(common if draw(st.integers(0, 3)) else draw(shapes()), f"s{i}")) for i in range(count)]
@@ -219,6 +290,9 @@ def test_the_quick_projection_scan_passes_only_what_the_exact_scan_passes(text):
 
     scene = parse_scene(text, "random.yaml")
     for spec in scene.surfaces:
+        if spec.type == "point_pairs":
+            _check_ribbon_scan(spec)
+            continue
         if spec.interpolation != "blade":
             continue
         built = build_blade_controls([spec], len(spec.controls))
@@ -237,6 +311,32 @@ def test_the_quick_projection_scan_passes_only_what_the_exact_scan_passes(text):
         assert exactly_projectable(surface.curve, t, built.controls)[0] == passes
         if surely_projectable(surface.curve, t, built.controls)[0]:
             assert passes
+
+def _check_ribbon_scan(spec):
+    """exactly_projectable at grade 2 on the dense grid decides as the per-surface ribbon mesher's
+    check_projection_exists() (no sampled parameters) does."""
+    from cgamesh.geometry.construction import build_surface
+    from cgamesh.geometry.surface import SCAN_SAMPLES_PER_SEGMENT
+    from cgamesh.meshing.scene_batch.projection_scan import exactly_projectable
+
+    try:
+        surface = build_surface(spec)
+    except CgameshError:
+        return
+    if surface.four_vector_free:
+        return  # the scalar projection: not batched
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            surface.check_projection_exists()
+        passes = True
+    except CgameshError:
+        passes = False
+    dense = np.linspace(0.0, surface.segment_count, SCAN_SAMPLES_PER_SEGMENT * surface.segment_count + 1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert exactly_projectable(surface.curve, dense, surface.controls[None], grade=2)[0] == passes
+
 
 def test_a_carrier_that_flips_between_samples_is_refined_exactly():
     """Two circles nearly in one plane: the carrier part flips between scan samples, which only
@@ -264,13 +364,14 @@ def test_a_carrier_that_flips_between_samples_is_refined_exactly():
         assert isinstance(alone, Exception) != meshes and (meshes or "turns into a line" in str(alone))
         assert_alike(alone, batched)
 
-def test_the_benchmark_runs_at_a_small_size_and_finds_the_meshes_identical(capsys):
+@pytest.mark.parametrize("kind", ["tube", "ribbon"])
+def test_the_benchmark_runs_at_a_small_size_and_finds_the_meshes_identical(capsys, kind):
     sys.path.insert(0, str(ROOT / "benchmarks"))
     import bench_scene_batch
 
-    assert bench_scene_batch.main(["--surfaces", "12", "--controls", "3"]) == 0
+    assert bench_scene_batch.main(["--surfaces", "12", "--controls", "3", "--kind", kind]) == 0
     out = capsys.readouterr().out
-    assert "meshes identical" in out and "of 12 surfaces batched" in out
+    assert "meshes identical" in out and "12 of 12 surfaces batched" in out
 
 
 def test_a_large_surface_is_meshed_alone_as_before():

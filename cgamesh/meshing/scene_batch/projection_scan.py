@@ -109,12 +109,14 @@ def surely_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarray
     return ok
 
 
-def exactly_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarray:
+def exactly_projectable(curve, t: np.ndarray, controls: np.ndarray, grade: int = 3) -> np.ndarray:
     """(S,) bool: check_projection_exists(sampled=t) passes, decided as it decides, bit for bit,
     for surfaces the quick scan could not vouch for (``surely_projectable`` False): the margins
     and projected blades at every scan sample, and each flip of the carrier between samples
     refined (flatness.find_line's search, every flip of every surface at once) to whether the
-    object there reaches past LINE_REACH (a line: the per-surface path refuses the surface)."""
+    object there reaches past LINE_REACH (a line: the per-surface path refuses the surface).
+    ``grade``: 3 for circles, 2 for point pairs (a flat point in place of a line); controls
+    whose interpolants are four-vector free (``project_scalar``) are not for this scan."""
     count, n, _ = controls.shape
     scan = scan_parameters(curve, t)
     samples = len(scan)
@@ -123,9 +125,9 @@ def exactly_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarra
     picked = flat[(basis.indices[None] + (np.arange(count) * n)[:, None, None]).reshape(count * samples, -1)]
     weights = np.broadcast_to(basis.weights, (count,) + basis.weights.shape).reshape(count * samples, -1)
     values = np.einsum("ak,akm->am", weights, picked)
-    margins = margin(values, 3, np.tile(basis.weight_sum(), count)).reshape(count, samples)
+    margins = margin(values, grade, np.tile(basis.weight_sum(), count)).reshape(count, samples)
     ok = np.all(margins >= MIN_MARGIN, axis=1)
-    m = carrier_part(project_blades(values, 3), 3).reshape(count, samples, 3)
+    m = carrier_part(project_blades(values, grade), grade).reshape(count, samples, 3)
     lows, highs, owners = [], [], []
     for s in np.flatnonzero(ok):  # each surface's own (A - 1, 3) sums, as find_line takes them
         flips = np.flatnonzero(~(np.einsum("ac,ac->a", m[s, :-1], m[s, 1:]) > 0.0))
@@ -142,8 +144,8 @@ def exactly_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarra
         chosen = np.repeat(owner, grid.shape[1])
         rows = flat[where.indices + (chosen * n)[:, None]]
         with np.errstate(invalid="ignore", over="ignore"):
-            blades = project_blades(np.einsum("ak,akm->am", where.weights, rows), 3)
-            return np.linalg.norm(carrier_part(blades, 3), axis=-1).reshape(grid.shape)
+            blades = project_blades(np.einsum("ak,akm->am", where.weights, rows), grade)
+            return np.linalg.norm(carrier_part(blades, grade), axis=-1).reshape(grid.shape)
 
     best_norm = np.full(len(lo), np.inf)
     rows = np.arange(len(lo))
@@ -156,6 +158,6 @@ def exactly_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarra
         best_norm[better] = norms[rows, k][better]
         step = (hi - lo) / (flatness._REFINE_SAMPLES - 1)
         lo, hi = np.maximum(lo, grid[rows, k] - step), np.minimum(hi, grid[rows, k] + step)
-    line = flatness.reach(best_norm[:, None] * np.array([1.0, 0.0, 0.0]), 3) > flatness.LINE_REACH
+    line = flatness.reach(best_norm[:, None] * np.array([1.0, 0.0, 0.0]), grade) > flatness.LINE_REACH
     ok[owner[line]] = False
     return ok

@@ -1,8 +1,9 @@
 """Many blade-interpolated point-pair surfaces (ribbons) of one shape of work sampled as one set of arrays.
 
 A group shares its curve (kind, control count, parameters), closed, vertices across and rulings
-along. Each surface is built and its projection scanned as the per-surface path does it
-(``build_surface``, ``check_projection_exists``); then the interpolants of every ruling of every
+along. Each surface is built as the per-surface path builds it (``build_surface``); the
+projection scan of ``check_projection_exists`` runs on all of them at once
+(``projection_scan.exactly_projectable``, which decides as it does, bit for bit); then the interpolants of every ruling of every
 surface, their projections (section 6), end points (eq. 5) and end-point velocities
 (eqs. 19-20) are computed once over all S K rows, with the operations ``EvolvedSurface.sample``
 and ``ribbons.PairRings.from_projection`` apply to each row (products.geometric and inner
@@ -25,9 +26,10 @@ from cgamesh.geometry.algebra import products
 from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
 from cgamesh.geometry.objects import point_pair_endpoints
 from cgamesh.geometry.projection import project
-from cgamesh.geometry.surface import MIN_MARGIN
+from cgamesh.geometry.surface import MIN_MARGIN, SCAN_SAMPLES_PER_SEGMENT
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.ribbons import PairRings, mesh_ribbon_surface
+from cgamesh.meshing.scene_batch.projection_scan import exactly_projectable
 
 
 def _pair_rings(blades, derivatives, row_origin, row_scale):
@@ -46,20 +48,20 @@ def mesh_ribbon_group(surfaces, around: int, along: int, closed: bool) -> list[S
     point-pair surfaces sharing one curve, or None for a surface left to the per-surface path."""
     count = len(surfaces)
     results: list[SurfaceMesh | None] = [None] * count
-    fit = []
-    for s, surface in enumerate(surfaces):
-        if surface.four_vector_free:
-            continue  # the scalar projection: left to the per-surface path
-        try:
-            surface.check_projection_exists()
-        except CgameshError:
-            continue  # the per-surface path names the error
-        fit.append(s)
-    if not fit:
+    # the scalar projection (four-vector free interpolants) is left to the per-surface path
+    fit = np.array([s for s, surface in enumerate(surfaces) if not surface.four_vector_free], dtype=np.intp)
+    if fit.size == 0:
         return results
     curve = surfaces[fit[0]].curve
-    t = np.linspace(0.0, curve.segment_count, along)
     controls = np.stack([surfaces[s].controls for s in fit])  # (F, n, 32)
+    # check_projection_exists() on its own dense grid, as mesh_ribbon_surface calls it, decided
+    # bit for bit for all surfaces at once; a surface it refuses is meshed alone (which names why)
+    dense = np.linspace(0.0, curve.segment_count, SCAN_SAMPLES_PER_SEGMENT * curve.segment_count + 1)
+    scanned = exactly_projectable(curve, dense, controls, grade=2)
+    fit, controls = fit[scanned], controls[scanned]
+    if fit.size == 0:
+        return results
+    t = np.linspace(0.0, curve.segment_count, along)
     n = controls.shape[1]
     basis = curve.basis(t)
     rows = np.repeat(np.arange(len(fit)), along)
