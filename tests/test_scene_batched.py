@@ -269,10 +269,15 @@ def scenes(draw):
 # outward estimate, which the per-surface mesher never forms there).
 _VANISHING_SAMPLE = 'cgamesh: 1\nsurfaces:\n  - name: s0\n    type: circles\n    curve: bezier\n    closed: false\n    align: true\n    resolution: {around: 3, along: 2}\n    controls:\n      - {through: [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]]}\n      - {through: [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]]}\n      - {through: [[2.341640786499874, 0.0, 0.6708203932499369], [1.3416407864998738, 0.0, 1.670820393249937], [0.34164078649987384, 0.0, 0.6708203932499369]]}\n      - {through: [[3.402300958279695, 0.0, 1.731480565029758], [2.402300958279695, 0.0, 2.731480565029758], [1.402300958279695, 0.0, 1.731480565029758]]}\n      - {center: [3.2343512526175386, 0.0, 2.979556006536524], normal: [1.0, 0.0, 0.0], radius: 1.0}\n      - {center: [3.9051716458674757, 0.0, 4.321196793036398], normal: [1.0, 0.0, 0.0], radius: 1.0}\n'
 
+# Found by a random search: a surface whose margins fail on the exact scan, whose NaN blades
+# then met a matrix product outside np.errstate (a warning the per-surface path never gives).
+_NAN_CARRIER = 'cgamesh: 1\nsurfaces:\n  - name: s0\n    type: circles\n    interpolation: blade\n    curve: linear\n    closed: false\n    align: true\n    caps: false\n    resolution: {around: 3, along: 2}\n    controls:\n      - {through: [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]]}\n      - {through: [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]]}\n      - {through: [[1.3416407864998738, 0.0, 1.670820393249937], [0.4841478607873295, 0.5144957554275266, 0.6708203932499369], [1.3416407864998738, 0.0, -0.3291796067500631]]}\n  - name: s1\n    type: circles\n    interpolation: blade\n    curve: linear\n    closed: false\n    align: false\n    caps: false\n    resolution: {around: 3, along: 2}\n    controls:\n      - {through: [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]]}\n      - {center: [1.3416407864998738, 0.6708203932499369, 0.0], normal: [0.0, 0.0, 1.0], radius: 0.5}\n      - {through: [[1.902300958279695, 1.731480565029758, 0.0], [2.402300958279695, 1.231480565029758, 0.0], [2.902300958279695, 1.731480565029758, 0.0]]}\n      - {center: [3.402300958279695, 2.731480565029758, 0.5], normal: [1.0, 0.0, 0.0], radius: 1.0}\n'
+
 
 @PROPERTY
 @given(text=scenes(), tangents=st.booleans())
 @example(text=_VANISHING_SAMPLE, tangents=False)
+@example(text=_NAN_CARRIER, tangents=False)
 def test_random_scenes_mesh_the_same_batched_or_are_refused_alike(text, tangents):
     scene = parse_scene(text, "random.yaml")
     assert_alike(*mesh_both(scene, tangents=tangents))

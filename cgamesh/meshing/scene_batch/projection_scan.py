@@ -127,7 +127,8 @@ def exactly_projectable(curve, t: np.ndarray, controls: np.ndarray, grade: int =
     values = np.einsum("ak,akm->am", weights, picked)
     margins = margin(values, grade, np.tile(basis.weight_sum(), count)).reshape(count, samples)
     ok = np.all(margins >= MIN_MARGIN, axis=1)
-    m = carrier_part(project_blades(values, grade), grade).reshape(count, samples, 3)
+    with np.errstate(invalid="ignore", over="ignore"):  # NaN blades of surfaces whose margins failed
+        m = carrier_part(project_blades(values, grade), grade).reshape(count, samples, 3)
     lows, highs, owners = [], [], []
     for s in np.flatnonzero(ok):  # each surface's own (A - 1, 3) sums, as find_line takes them
         flips = np.flatnonzero(~(np.einsum("ac,ac->a", m[s, :-1], m[s, 1:]) > 0.0))
