@@ -3,12 +3,12 @@
 A group shares its curve (kind, control count, parameters), closed, vertices across and rulings
 along. Each surface is built as the per-surface path builds it (``build_surface``); the
 projection scan of ``check_projection_exists`` runs on all of them at once
-(``projection_scan.exactly_projectable``, which decides as it does, bit for bit); then the interpolants of every ruling of every
-surface, their projections (section 6), end points (eq. 5) and end-point velocities
-(eqs. 19-20) are computed once over all S K rows, with the operations ``EvolvedSurface.sample``
-and ``ribbons.PairRings.from_projection`` apply to each row (products.geometric and inner
-compute a row alone as in a batch; everything else is row-wise), so the rings are the same
-bits. The rest of ``ribbons.mesh_ribbon_surface`` (normals, their continuity, faces, UVs) runs
+(``projection_scan.exactly_projectable``, which decides as it does, bit for bit); then the
+interpolants of every ruling of every surface, their projections (section 6), end points
+(eq. 5) and end-point velocities (eqs. 19-20) are computed once over all S K rows, with the
+operations ``EvolvedSurface.sample`` and ``ribbons.PairRings.from_projection`` apply to each
+row (products.geometric and inner compute a row alone as in a batch; everything else is
+row-wise), so the rings are the same bits. The rest of ``ribbons.mesh_ribbon_surface`` (normals, their continuity, faces, UVs) runs
 per surface on its slice of the rings.
 
 Left to the per-surface path (None): a surface whose build or scan fails (its error is named

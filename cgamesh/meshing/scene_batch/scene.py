@@ -4,8 +4,10 @@
 package doc) are grouped by the shape of their work (curve kind, control count, curve
 parameters, closed, vertices around, rings along; for motor interpolation the motion's kind and
 node count) and their controls built (blade) or motions splined (motor, one surface at a time),
-in chunks of about CHUNK_RINGS rings; every other surface, and every surface whose controls the
-per-surface builder would refuse or change, is left to the per-surface path. ``mesh(i)``
+in chunks of about CHUNK_RINGS rings; point-pair surfaces are built one by one and grouped by
+their built curve, closed, around and along (ribbon_group.py); every other surface, and every
+surface whose controls the per-surface builder would refuse or change, is left to the
+per-surface path. ``mesh(i)``
 gives surface i's mesh, meshing its whole chunk the first time one of its surfaces is
 asked for, or None when the chunk's mesher left that surface to the per-surface path.
 """
