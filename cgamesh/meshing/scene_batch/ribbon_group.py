@@ -27,7 +27,11 @@ from cgamesh.geometry.algebra.conformal import EUCLIDEAN, up, weight
 from cgamesh.geometry.objects import point_pair_endpoints
 from cgamesh.geometry.projection import project
 from cgamesh.geometry.surface import MIN_MARGIN, SCAN_SAMPLES_PER_SEGMENT
+from cgamesh.meshing import ribbons
+from cgamesh.meshing import uv as uv_map
+from cgamesh.meshing.circles import drop_zero_area, grid_faces
 from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.meshing.normals import expand
 from cgamesh.meshing.ribbons import PairRings, mesh_ribbon_surface
 from cgamesh.meshing.scene_batch.projection_scan import exactly_projectable
 
@@ -79,8 +83,21 @@ def mesh_ribbon_group(surfaces, around: int, along: int, closed: bool) -> list[S
     good = (projection.margin >= MIN_MARGIN) & np.isfinite(a).all(axis=1) & np.isfinite(b).all(axis=1)
     good &= np.isfinite(da).all(axis=1) & np.isfinite(db).all(axis=1)
     good = good.reshape(len(fit), along).all(axis=1)
+    # Rows of surfaces found unfit are overwritten by a fit surface's (in place, keeping every
+    # array's layout), so the common steps below meet no NaN; their meshes are not kept.
+    if good.any() and not good.all():
+        bad = (np.flatnonzero(~good)[:, None] * along + np.arange(along)).ravel()
+        donor = np.tile(np.flatnonzero(good)[0] * along + np.arange(along), int(np.count_nonzero(~good)))
+        for rows_array in (a, b, da, db):
+            rows_array[bad] = rows_array[donor]
+    plain = good & _plain_surfaces(a, b, da, db, around, along) if good.any() else good
+    names = [surfaces[s].name for s in fit]
+    common = _common_meshes(a, b, da, db, around, along, closed, plain, names) if plain.any() else {}
     for row, s in enumerate(fit):
         if not good[row]:
+            continue
+        if plain[row]:
+            results[s] = common[row]
             continue
         part = slice(row * along, (row + 1) * along)
         rings = PairRings(a[part], b[part], da[part], db[part])
@@ -89,3 +106,66 @@ def mesh_ribbon_group(surfaces, around: int, along: int, closed: bool) -> list[S
         except CgameshError:
             continue  # meshed again alone, which names the error
     return results
+
+
+def _ruling_fields(a, b, da, db):
+    """ribbons._ruling_normals' first step on rows (R,): d, N_a, N_b (R, 3), the scale (R,), and
+    whether each ruling's normal vanishes everywhere (the mesher's nearby-sample repair)."""
+    d = b - a
+    n_a, n_b = np.cross(d, da), np.cross(d, db)
+    length = np.linalg.norm(d, axis=1)
+    scale = length * np.maximum(np.linalg.norm(da, axis=1), np.linalg.norm(db, axis=1))
+    flat = np.maximum(np.linalg.norm(n_a, axis=1), np.linalg.norm(n_b, axis=1)) <= ribbons.ZERO_FRACTION * scale
+    return d, n_a, n_b, scale, flat
+
+
+def _plain_surfaces(a, b, da, db, around: int, along: int) -> np.ndarray:
+    """(F,) bool: surfaces with no ruling whose normal vanishes everywhere and none along which
+    the field may reverse (ribbons._may_reverse): their normals need no repair, fold test or
+    winding by geometry, and are meshed as one set of arrays (``_common_meshes``)."""
+    _, n_a, n_b, _, flat = _ruling_fields(a, b, da, db)
+    s = np.linspace(0.0, 1.0, around)
+    suspicious = ribbons._may_reverse(n_a, n_b, s[1] - s[0])
+    return ~(flat | suspicious).reshape(-1, along).any(axis=1)
+
+
+def _common_meshes(a, b, da, db, around: int, along: int, closed: bool, plain: np.ndarray, names) -> dict:
+    """mesh_ribbon_surface's meshes of the plain surfaces (``_plain_surfaces``), by row of ``plain``:
+    the same steps on all their rulings at once (ribbons._continuous_signs without reversing
+    rulings, the documented side, positions, ribbons._unit_normals), then faces and UVs per surface."""
+    chosen = np.flatnonzero(plain)
+    count = len(chosen)
+    rows = (chosen[:, None] * along + np.arange(along)).ravel()
+    a, b, da, db = a[rows], b[rows], da[rows], db[rows]
+    d, n_a, n_b, scale, _ = _ruling_fields(a, b, da, db)
+    s = np.linspace(0.0, 1.0, around)
+    samples = ribbons._unit(ribbons._ruling_values(n_a, n_b, ribbons._COMPARE_AT, scale))
+    by_surface = samples.reshape((count, along) + samples.shape[1:])
+    agreement = np.einsum("kmc,kmc->k", np.ascontiguousarray(by_surface[:, :-1]).reshape((-1,) + samples.shape[1:]),
+                          np.ascontiguousarray(by_surface[:, 1:]).reshape((-1,) + samples.shape[1:]))
+    reversed_ = (agreement < 0.0).reshape(count, along - 1)
+    flipped = np.cumsum(np.concatenate([np.zeros((count, 1), dtype=bool), reversed_], axis=1), axis=1) % 2 == 1
+    signs = np.where(flipped, -1.0, 1.0)
+    # the documented side: the raw field d x dx/dt at most vertices
+    signs = np.where((signs.sum(axis=1) * around < 0.0)[:, None], -signs, signs).reshape(-1, 1)
+    positions = expand(np.stack([a, d], axis=1), np.stack([np.ones_like(s), s], axis=1))
+    normals, size_sq = ribbons._unit_normals(n_a, n_b, s, scale, signs)
+    positions = positions.reshape(count, along, around, 3)
+    normals = normals.reshape(count, along, around, 3)
+    size_sq = size_sq.reshape(count, along, around)
+    signs = signs.reshape(count, along, 1)
+    ends = np.stack([a, 0.5 * (a + b), b], axis=1).reshape(count, along, 3, 3)
+    meshes = {}
+    for i, row in enumerate(chosen):
+        surface_positions, surface_normals = positions[i], normals[i]
+        if closed:  # the last ruling is the first one again: same vertices, same normals
+            surface_positions[-1] = surface_positions[0]
+            surface_normals[-1] = surface_normals[0] * np.sign(
+                np.einsum("mc,mc->", surface_normals[-1], surface_normals[0]) or 1.0)
+        faces = grid_faces(along, around, signs[i])
+        flat_positions = surface_positions.reshape(-1, 3)
+        faces = drop_zero_area(flat_positions, faces, np.flatnonzero(size_sq[i] <= ribbons.NEAR_ZERO_FRACTION**2))
+        uvs = uv_map.grid_uvs(uv_map.along_coordinates(ends[i]), around)
+        meshes[row] = SurfaceMesh(name=names[row], positions=flat_positions, normals=surface_normals.reshape(-1, 3),
+                                  uvs=uvs, faces=faces, double_sided=True)
+    return meshes
