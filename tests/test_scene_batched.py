@@ -140,6 +140,32 @@ def test_random_ribbons_mesh_the_same_batched_and_all_are_batched(controls):
     assert batched_count(scene, resolution) == len(scene.surfaces)
 
 
+@pytest.mark.parametrize("curve, closed", [("linear", False), ("bezier", False), ("rational_bezier", False),
+                                           ("kb", False), ("kb", True), ("catmull_rom", True)])
+def test_random_ribbons_of_every_curve_kind_mesh_the_same_batched(curve, closed, monkeypatch):
+    """Every curve kind, open and closed; many surfaces take the all-rows path (no ruling that
+    stands still or may reverse), the others the ribbon mesher's tail on their rings."""
+    from cgamesh.meshing.scene_batch import ribbon_group
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from bench_scene_batch import ribbon_document
+
+    text = ribbon_document(30, 4, seed=7).replace("    curve: catmull_rom\n",
+                                                  f"    curve: {curve}\n    closed: {str(closed).lower()}\n")
+    if curve == "kb":
+        text = text.replace("    closed:", "    tension: 0.5\n    bias: -0.5\n    continuity: 0.25\n    closed:")
+    scene = parse_scene(text, "ribbons.yaml")
+    common = []
+    original = ribbon_group._common_meshes
+    monkeypatch.setattr(ribbon_group, "_common_meshes", lambda *args: common.append(int(args[7].sum()))
+                        or original(*args))
+    alone, batched = mesh_both(scene)
+    assert_same_meshes(alone, batched)
+    assert batched_count(scene) == len(scene.surfaces)
+    # a random walk closed into a loop twists back across itself: fewer rulings are plain there
+    assert sum(common) >= len(scene.surfaces) // (3 if closed else 2)
+
+
 def test_a_ribbon_refusal_is_the_per_surface_paths():
     """A ribbon whose controls are opposite (align: false) has no projection between them: the
     batched pass leaves it, and the per-surface path refuses it with its place in the file; its
