@@ -8,8 +8,10 @@ interpolants of every ruling of every surface, their projections (section 6), en
 (eq. 5) and end-point velocities (eqs. 19-20) are computed once over all S K rows, with the
 operations ``EvolvedSurface.sample`` and ``ribbons.PairRings.from_projection`` apply to each
 row (products.geometric and inner compute a row alone as in a batch; everything else is
-row-wise), so the rings are the same bits. The rest of ``ribbons.mesh_ribbon_surface`` (normals, their continuity, faces, UVs) runs
-per surface on its slice of the rings.
+row-wise), so the rings are the same bits. Surfaces
+whose rulings need none of the ribbon mesher's repairs (``_plain_surfaces``) take their normals,
+signs and vertices as one set of arrays too (``_common_meshes``); the others run the rest of
+``ribbons.mesh_ribbon_surface`` on their slice of the rings.
 
 Left to the per-surface path (None): a surface whose build or scan fails (its error is named
 there), whose interpolants are four-vector free (the scalar projection), whose sampled margin
