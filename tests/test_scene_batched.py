@@ -345,10 +345,11 @@ def test_the_quick_projection_scan_passes_only_what_the_exact_scan_passes(text):
 
 def _check_ribbon_scan(spec):
     """exactly_projectable at grade 2 on the dense grid decides as the per-surface ribbon mesher's
-    check_projection_exists() (no sampled parameters) does."""
+    check_projection_exists() (no sampled parameters) does; surely_projectable passes only
+    surfaces that scan passes."""
     from cgamesh.geometry.construction import build_surface
     from cgamesh.geometry.surface import SCAN_SAMPLES_PER_SEGMENT
-    from cgamesh.meshing.scene_batch.projection_scan import exactly_projectable
+    from cgamesh.meshing.scene_batch.projection_scan import exactly_projectable, surely_projectable
 
     try:
         surface = build_surface(spec)
@@ -367,6 +368,8 @@ def _check_ribbon_scan(spec):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert exactly_projectable(surface.curve, dense, surface.controls[None], grade=2)[0] == passes
+        if surely_projectable(surface.curve, dense, surface.controls[None], grade=2)[0]:
+            assert passes
 
 
 def test_a_carrier_that_flips_between_samples_is_refined_exactly():

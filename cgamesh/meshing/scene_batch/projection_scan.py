@@ -51,9 +51,12 @@ def scan_parameters(curve, t: np.ndarray) -> np.ndarray:
     return np.linspace(0.0, segments, SCAN_SAMPLES_PER_SEGMENT * segments + 1)
 
 
-def surely_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarray:
+def surely_projectable(curve, t: np.ndarray, controls: np.ndarray, grade: int = 3) -> np.ndarray:
     """(S,) bool: the scan of each surface (controls (S, n, 32)) surely finds no margin below
-    MIN_MARGIN and no flip of m, so check_projection_exists(sampled=t) passes without refining."""
+    MIN_MARGIN and no flip of m, so check_projection_exists(sampled=t) passes without refining.
+    ``grade``: 3 for circles, 2 for point pairs (the same algebra: S X' = (g X' - <F X'>) /
+    (sqrt(2 g) beta) for a blade of either grade)."""
+    blade = (grade,)
     count, n, _ = controls.shape
     scan = scan_parameters(curve, t)
     basis = curve.basis(scan)
@@ -62,13 +65,13 @@ def surely_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarray
     flat = controls.reshape(-1, BLADE_COUNT)
     left = np.repeat(controls, n, axis=1).reshape(-1, BLADE_COUNT)
     right = np.tile(products.reverse(controls), (1, n, 1)).reshape(-1, BLADE_COUNT)
-    pairs = products.geometric(left, right, _CIRCLE, _CIRCLE, (0, 4))[:, _SIGMA].reshape(count, n, n, 6)
-    carriers = carrier_part(flat, 3).reshape(count, n, 3)
+    pairs = products.geometric(left, right, blade, blade, (0, 4))[:, _SIGMA].reshape(count, n, n, 6)
+    carriers = carrier_part(flat, grade).reshape(count, n, 3)
     fours = np.zeros((5, BLADE_COUNT))
     fours[np.arange(5), _FOURS] = 1.0
     turned = products.geometric(np.repeat(fours[None], len(flat), axis=0).reshape(-1, BLADE_COUNT),
-                                np.repeat(flat, 5, axis=0), (4,), _CIRCLE, _CIRCLE)
-    turned = carrier_part(turned, 3).reshape(count, n, 5, 3)
+                                np.repeat(flat, 5, axis=0), (4,), blade, blade)
+    turned = carrier_part(turned, grade).reshape(count, n, 5, 3)
     # Samples sharing their controls (a segment of a spline, all of a Bezier curve) take their sums
     # as one matrix product: weights (A', k) or their pairwise products (A', k k) times the tables.
     patterns, which = np.unique(index, axis=0, return_inverse=True)

@@ -2,8 +2,9 @@
 
 A group shares its curve (kind, control count, parameters), closed, vertices across and rulings
 along. Each surface is built as the per-surface path builds it (``build_surface``); the
-projection scan of ``check_projection_exists`` runs on all of them at once
-(``projection_scan.exactly_projectable``, which decides as it does, bit for bit); then the
+projection scan of ``check_projection_exists`` runs on all of them at once (the quick scan
+from the controls' products, ``projection_scan.surely_projectable``, then for the surfaces it
+cannot vouch for ``exactly_projectable``, which decides as it does, bit for bit); then the
 interpolants of every ruling of every surface, their projections (section 6), end points
 (eq. 5) and end-point velocities (eqs. 19-20) are computed once over all S K rows, with the
 operations ``EvolvedSurface.sample`` and ``ribbons.PairRings.from_projection`` apply to each
@@ -35,7 +36,7 @@ from cgamesh.meshing.circles import drop_zero_area, grid_faces
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.normals import expand
 from cgamesh.meshing.ribbons import PairRings, mesh_ribbon_surface
-from cgamesh.meshing.scene_batch.projection_scan import exactly_projectable
+from cgamesh.meshing.scene_batch.projection_scan import exactly_projectable, surely_projectable
 
 
 def _pair_rings(blades, derivatives, row_origin, row_scale):
@@ -63,7 +64,10 @@ def mesh_ribbon_group(surfaces, around: int, along: int, closed: bool) -> list[S
     # check_projection_exists() on its own dense grid, as mesh_ribbon_surface calls it, decided
     # bit for bit for all surfaces at once; a surface it refuses is meshed alone (which names why)
     dense = np.linspace(0.0, curve.segment_count, SCAN_SAMPLES_PER_SEGMENT * curve.segment_count + 1)
-    scanned = exactly_projectable(curve, dense, controls, grade=2)
+    scanned = surely_projectable(curve, dense, controls, grade=2)
+    doubtful = np.flatnonzero(~scanned)
+    if doubtful.size:
+        scanned[doubtful] = exactly_projectable(curve, dense, controls[doubtful], grade=2)
     fit, controls = fit[scanned], controls[scanned]
     if fit.size == 0:
         return results
