@@ -1,10 +1,12 @@
 """Meshing a scene file of many small tubes: the batched pass against meshing each surface alone.
 
     python benchmarks/bench_scene_batch.py [--surfaces 2000] [--controls 4] [--repeats 1]
-                                           [--interpolation blade|motor]
+                                           [--interpolation blade|motor] [--kind tube|ribbon]
 
 Writes the scene of ``bench_scene_reader`` (``surfaces`` catmull_rom tubes of ``controls``
-random circles, 8 around, 4 rings per control; blade or motor interpolation), reads it once,
+random circles, 8 around, 4 rings per control; blade or motor interpolation), or with
+``--kind ribbon`` one of as many catmull_rom ribbons (``ribbon_document``: ``controls`` random
+point pairs, 8 across, 4 rulings per control, blade interpolation), reads it once,
 then meshes it in process (``mesh_scene``, reading and export excluded) surface by surface
 (``batched=False``) and with the batched pass, and prints the CPU time of this process per surface for both and their
 ratio (the machine may be shared: CPU time, the best of ``repeats``), with the share of
@@ -39,6 +41,33 @@ from cgamesh.pipeline import Resolution, _batched_share, mesh_scene  # noqa: E40
 FIELDS = ("positions", "normals", "uvs", "faces", "tangents", "uv_lengths", "weld", "colors")
 
 
+def ribbon_document(count: int, controls: int, seed: int = 1) -> str:
+    """A scene of ``count`` catmull_rom ribbons, each ``controls`` point pairs along a random walk
+    whose segments turn a little from control to control; 8 across, 4 rulings per control."""
+    rng = np.random.default_rng(seed)
+    lines = ["cgamesh: 1", "surfaces:"]
+    for i in range(count):
+        centre = rng.uniform(-50.0, 50.0, 3)
+        step, across = rng.normal(size=3), rng.normal(size=3)
+        lines += [f"  - name: ribbon{i}", "    type: point_pairs", "    curve: catmull_rom",
+                  f"    resolution: {{around: 8, along: {4 * controls}}}", "    controls:"]
+        previous = None
+        for _ in range(controls):
+            width = rng.uniform(0.5, 1.0)
+            # across the walk, turning by less than a quarter turn from the previous control
+            across = across - (across @ step) / (step @ step) * step
+            across = across / np.linalg.norm(across)
+            if previous is not None and across @ previous < 0.0:
+                across = -across
+            previous = across
+            a, b = centre - width * across, centre + width * across
+            lines.append(f"      - {{a: {np.round(a, 6).tolist()}, b: {np.round(b, 6).tolist()}}}")
+            step = step / np.linalg.norm(step) + 0.3 * rng.normal(size=3)
+            centre = centre + 0.8 * step / np.linalg.norm(step)
+            across = across + 0.3 * rng.normal(size=3)
+    return "\n".join(lines) + "\n"
+
+
 def cpu_best(repeats: int, work):
     best, result = float("inf"), None
     for _ in range(repeats):
@@ -63,19 +92,25 @@ def main(argv=None) -> int:
     parser.add_argument("--controls", type=int, default=4)
     parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--interpolation", choices=("blade", "motor"), default="blade")
+    parser.add_argument("--kind", choices=("tube", "ribbon"), default="tube")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "scene.yaml"
-        text = flow_style(scene_document(args.surfaces, args.controls))
-        path.write_text(text.replace("    type: circles\n",
-                                     f"    type: circles\n    interpolation: {args.interpolation}\n"))
+        if args.kind == "ribbon":
+            path.write_text(ribbon_document(args.surfaces, args.controls))
+        else:
+            text = flow_style(scene_document(args.surfaces, args.controls))
+            path.write_text(text.replace("    type: circles\n",
+                                         f"    type: circles\n    interpolation: {args.interpolation}\n"))
         scene = load_scene(path, rendering=False)
     count = len(scene.surfaces)
     share = _batched_share(scene.surfaces, Resolution(), False)
     taken = sum(1 for i in range(count) if share.takes(i) and share.mesh(i) is not None)
     alone, reference = cpu_best(args.repeats, lambda: mesh_scene(scene, batched=False))
     batched, meshes = cpu_best(args.repeats, lambda: mesh_scene(scene, batched=True))
-    print(f"{count} tubes of {args.controls} controls, {args.interpolation} interpolation; "
+    what = "ribbons" if args.kind == "ribbon" else "tubes"
+    interpolation = "blade" if args.kind == "ribbon" else args.interpolation
+    print(f"{count} {what} of {args.controls} controls, {interpolation} interpolation; "
           f"load average {os.getloadavg()[0]:.2f}")
     print(f"  each surface alone   {1e3 * alone / count:8.3f} ms CPU per surface")
     print(f"  batched pass         {1e3 * batched / count:8.3f} ms CPU per surface "

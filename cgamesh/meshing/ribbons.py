@@ -271,7 +271,8 @@ def _unit_normals(n_a: np.ndarray, n_b: np.ndarray, s: np.ndarray, scale: np.nda
 
 
 def mesh_ribbon_surface(surface: EvolvedSurface, around: int, along: int | None = None,
-                        closed: bool = False, t: np.ndarray | None = None) -> SurfaceMesh:
+                        closed: bool = False, t: np.ndarray | None = None,
+                        rings: PairRings | None = None) -> SurfaceMesh:
     """Triangulate an evolved point-pair surface on ``along`` rulings of ``around`` vertices each.
 
     Returns a double-sided SurfaceMesh (along * around vertices, ruling-major) in world
@@ -284,8 +285,9 @@ def mesh_ribbon_surface(surface: EvolvedSurface, around: int, along: int | None 
     if around < 2 or along is None or along < 2:
         raise InvalidInputError(f"surface '{surface.name}': a ribbon needs around >= 2 and along >= 2, "
                                 f"got around = {around}, along = {along}")
-    surface.check_projection_exists()
-    rings = PairRings.from_projection(surface.sample(t), surface.frame)
+    if rings is None:
+        surface.check_projection_exists()
+        rings = PairRings.from_projection(surface.sample(t), surface.frame)
     d = rings.b - rings.a
     n_a, n_b, scale = _ruling_normals(surface, t, rings, d)
     s = np.linspace(0.0, 1.0, around)

@@ -6,15 +6,18 @@ size. Here a scene's surfaces are grouped by the shape of their work (``scene``)
 control blades built for all its surfaces at once (``controls``; the projection scan from their
 pairwise products, ``projection_scan``) and its rings meshed as rows of one set of arrays
 (``circle_grid``), with the same operations per row as the per-surface
-mesher, so every mesh is that mesher's, bit for bit.
+mesher, so every mesh is that mesher's, bit for bit. Point-pair ribbons (``ribbon_group``) have
+their projection scan and their rulings' point pairs computed for the whole group, and the
+ribbon mesher finishes each surface on its slice.
 
 Covered: ``type: circles`` with ``interpolation: blade`` or ``motor``, every curve kind (linear,
 bezier, rational_bezier, kb, catmull_rom; open or closed), a fixed resolution (the file's or
 --around/--along) of at most CHUNK_VERTICES vertices a surface, with or without tangents, with
 or without caps, every uv mode (applied afterwards, as for any mesh). The circles come from a
-sampler (``samplers``: the blade projection, or the splined motion). Left to the per-surface
-path: point-pair ribbons, tolerance meshing, larger surfaces, and single surfaces needing a
-rare repair (see ``circle_grid``).
+sampler (``samplers``: the blade projection, or the splined motion). Also ``type: point_pairs``
+(blade interpolation, every curve kind, open or closed) at a fixed resolution. Left to the
+per-surface path: tolerance meshing, larger surfaces, and single surfaces needing a rare repair
+or refused (see ``circle_grid`` and ``ribbon_group``).
 """
 
 from cgamesh.meshing.scene_batch.scene import BatchedScene

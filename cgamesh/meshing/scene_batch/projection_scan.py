@@ -51,9 +51,12 @@ def scan_parameters(curve, t: np.ndarray) -> np.ndarray:
     return np.linspace(0.0, segments, SCAN_SAMPLES_PER_SEGMENT * segments + 1)
 
 
-def surely_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarray:
+def surely_projectable(curve, t: np.ndarray, controls: np.ndarray, grade: int = 3) -> np.ndarray:
     """(S,) bool: the scan of each surface (controls (S, n, 32)) surely finds no margin below
-    MIN_MARGIN and no flip of m, so check_projection_exists(sampled=t) passes without refining."""
+    MIN_MARGIN and no flip of m, so check_projection_exists(sampled=t) passes without refining.
+    ``grade``: 3 for circles, 2 for point pairs (the same algebra: S X' = (g X' - <F X'>) /
+    (sqrt(2 g) beta) for a blade of either grade)."""
+    blade = (grade,)
     count, n, _ = controls.shape
     scan = scan_parameters(curve, t)
     basis = curve.basis(scan)
@@ -62,13 +65,13 @@ def surely_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarray
     flat = controls.reshape(-1, BLADE_COUNT)
     left = np.repeat(controls, n, axis=1).reshape(-1, BLADE_COUNT)
     right = np.tile(products.reverse(controls), (1, n, 1)).reshape(-1, BLADE_COUNT)
-    pairs = products.geometric(left, right, _CIRCLE, _CIRCLE, (0, 4))[:, _SIGMA].reshape(count, n, n, 6)
-    carriers = carrier_part(flat, 3).reshape(count, n, 3)
+    pairs = products.geometric(left, right, blade, blade, (0, 4))[:, _SIGMA].reshape(count, n, n, 6)
+    carriers = carrier_part(flat, grade).reshape(count, n, 3)
     fours = np.zeros((5, BLADE_COUNT))
     fours[np.arange(5), _FOURS] = 1.0
     turned = products.geometric(np.repeat(fours[None], len(flat), axis=0).reshape(-1, BLADE_COUNT),
-                                np.repeat(flat, 5, axis=0), (4,), _CIRCLE, _CIRCLE)
-    turned = carrier_part(turned, 3).reshape(count, n, 5, 3)
+                                np.repeat(flat, 5, axis=0), (4,), blade, blade)
+    turned = carrier_part(turned, grade).reshape(count, n, 5, 3)
     # Samples sharing their controls (a segment of a spline, all of a Bezier curve) take their sums
     # as one matrix product: weights (A', k) or their pairwise products (A', k k) times the tables.
     patterns, which = np.unique(index, axis=0, return_inverse=True)
@@ -109,12 +112,14 @@ def surely_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarray
     return ok
 
 
-def exactly_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarray:
+def exactly_projectable(curve, t: np.ndarray, controls: np.ndarray, grade: int = 3) -> np.ndarray:
     """(S,) bool: check_projection_exists(sampled=t) passes, decided as it decides, bit for bit,
     for surfaces the quick scan could not vouch for (``surely_projectable`` False): the margins
     and projected blades at every scan sample, and each flip of the carrier between samples
     refined (flatness.find_line's search, every flip of every surface at once) to whether the
-    object there reaches past LINE_REACH (a line: the per-surface path refuses the surface)."""
+    object there reaches past LINE_REACH (a line: the per-surface path refuses the surface).
+    ``grade``: 3 for circles, 2 for point pairs (a flat point in place of a line); controls
+    whose interpolants are four-vector free (``project_scalar``) are not for this scan."""
     count, n, _ = controls.shape
     scan = scan_parameters(curve, t)
     samples = len(scan)
@@ -123,9 +128,10 @@ def exactly_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarra
     picked = flat[(basis.indices[None] + (np.arange(count) * n)[:, None, None]).reshape(count * samples, -1)]
     weights = np.broadcast_to(basis.weights, (count,) + basis.weights.shape).reshape(count * samples, -1)
     values = np.einsum("ak,akm->am", weights, picked)
-    margins = margin(values, 3, np.tile(basis.weight_sum(), count)).reshape(count, samples)
+    margins = margin(values, grade, np.tile(basis.weight_sum(), count)).reshape(count, samples)
     ok = np.all(margins >= MIN_MARGIN, axis=1)
-    m = carrier_part(project_blades(values, 3), 3).reshape(count, samples, 3)
+    with np.errstate(invalid="ignore", over="ignore"):  # NaN blades of surfaces whose margins failed
+        m = carrier_part(project_blades(values, grade), grade).reshape(count, samples, 3)
     lows, highs, owners = [], [], []
     for s in np.flatnonzero(ok):  # each surface's own (A - 1, 3) sums, as find_line takes them
         flips = np.flatnonzero(~(np.einsum("ac,ac->a", m[s, :-1], m[s, 1:]) > 0.0))
@@ -142,8 +148,8 @@ def exactly_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarra
         chosen = np.repeat(owner, grid.shape[1])
         rows = flat[where.indices + (chosen * n)[:, None]]
         with np.errstate(invalid="ignore", over="ignore"):
-            blades = project_blades(np.einsum("ak,akm->am", where.weights, rows), 3)
-            return np.linalg.norm(carrier_part(blades, 3), axis=-1).reshape(grid.shape)
+            blades = project_blades(np.einsum("ak,akm->am", where.weights, rows), grade)
+            return np.linalg.norm(carrier_part(blades, grade), axis=-1).reshape(grid.shape)
 
     best_norm = np.full(len(lo), np.inf)
     rows = np.arange(len(lo))
@@ -156,6 +162,6 @@ def exactly_projectable(curve, t: np.ndarray, controls: np.ndarray) -> np.ndarra
         best_norm[better] = norms[rows, k][better]
         step = (hi - lo) / (flatness._REFINE_SAMPLES - 1)
         lo, hi = np.maximum(lo, grid[rows, k] - step), np.minimum(hi, grid[rows, k] + step)
-    line = flatness.reach(best_norm[:, None] * np.array([1.0, 0.0, 0.0]), 3) > flatness.LINE_REACH
+    line = flatness.reach(best_norm[:, None] * np.array([1.0, 0.0, 0.0]), grade) > flatness.LINE_REACH
     ok[owner[line]] = False
     return ok

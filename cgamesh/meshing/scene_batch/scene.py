@@ -4,8 +4,10 @@
 package doc) are grouped by the shape of their work (curve kind, control count, curve
 parameters, closed, vertices around, rings along; for motor interpolation the motion's kind and
 node count) and their controls built (blade) or motions splined (motor, one surface at a time),
-in chunks of about CHUNK_RINGS rings; every other surface, and every surface whose controls the
-per-surface builder would refuse or change, is left to the per-surface path. ``mesh(i)``
+in chunks of about CHUNK_RINGS rings; point-pair surfaces are built one by one and grouped by
+their built curve, closed, around and along (ribbon_group.py); every other surface, and every
+surface whose controls the per-surface builder would refuse or change, is left to the
+per-surface path. ``mesh(i)``
 gives surface i's mesh, meshing its whole chunk the first time one of its surfaces is
 asked for, or None when the chunk's mesher left that surface to the per-surface path.
 """
@@ -17,10 +19,11 @@ from collections.abc import Sequence
 import numpy as np
 
 from cgamesh.errors import CgameshError
-from cgamesh.geometry.construction import build_motor_surface, make_curve
+from cgamesh.geometry.construction import build_motor_surface, build_surface, make_curve
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.scene_batch.circle_grid import mesh_circle_group
 from cgamesh.meshing.scene_batch.controls import build_blade_controls
+from cgamesh.meshing.scene_batch.ribbon_group import mesh_ribbon_group
 from cgamesh.meshing.scene_batch.samplers import BladeSampler, MotorSampler
 
 # Rings (surfaces times rings along) per chunk: measured fastest from about 800 to 1,600 on
@@ -35,8 +38,13 @@ CHUNK_VERTICES = 65536
 
 def group_key(spec, around: int | None, along: int | None, tolerance: float | None):
     """The shape of work of a blade-circle surface (curve, closed, around, along), "motor" for a
-    motor-interpolated one (its key follows from its built motion), or None when the batched pass
-    does not cover it."""
+    motor-interpolated one (its key follows from its built motion), "ribbon" for a point-pair
+    surface (its key follows from its built curve), or None when the batched pass does not
+    cover it."""
+    if (spec.type == "point_pairs" and tolerance is None and around is not None and along is not None
+            and around >= 2 and along >= 2 and around * along <= CHUNK_VERTICES
+            and getattr(spec, "interpolation", "blade") == "blade"):
+        return "ribbon"
     if (spec.type != "circles" or tolerance is not None or around is None or along is None or around < 3
             or along < 2 or (around + 1) * along > CHUNK_VERTICES):
         return None
@@ -56,6 +64,20 @@ def _chunk_size(around: int, along: int) -> int:
     return max(1, min(CHUNK_RINGS // along, CHUNK_VERTICES // ((around + 1) * along)))
 
 
+class _RibbonChunk:
+    """Built point-pair surfaces ``indices`` of one curve, closed, around and along."""
+
+    def __init__(self, indices: list[int], surfaces, closed: bool, around: int, along: int):
+        self.indices, self.surfaces = indices, surfaces
+        self.closed, self.around, self.along = closed, around, along
+        self.meshes: dict[int, SurfaceMesh | None] | None = None
+
+    def mesh_all(self, tangents: bool) -> list[SurfaceMesh | None]:
+        meshed = mesh_ribbon_group(self.surfaces, self.around, self.along, self.closed)
+        self.surfaces = None
+        return meshed
+
+
 class _Chunk:
     """Surfaces ``indices`` of one shape of work, their sampler and frames; ``meshes`` once meshed."""
 
@@ -65,6 +87,12 @@ class _Chunk:
         self.caps = np.array([spec.caps for spec in specs], dtype=bool)
         self.closed, self.around, self.along = closed, around, along
         self.meshes: dict[int, SurfaceMesh | None] | None = None
+
+    def mesh_all(self, tangents: bool) -> list[SurfaceMesh | None]:
+        meshed = mesh_circle_group(self.names, self.sampler, self.origin, self.scale, self.closed,
+                                   self.around, self.along, tangents, self.caps)
+        self.sampler = None  # the controls are no longer needed
+        return meshed
 
 
 class BatchedScene:
@@ -81,6 +109,7 @@ class BatchedScene:
         planned (tolerance None for a fixed resolution)."""
         blades: dict[object, list[int]] = {}
         motors: dict[object, list[tuple[int, object]]] = {}
+        ribbons: dict[object, list[tuple[int, object]]] = {}
         for index, (spec, request) in enumerate(zip(specs, requests)):
             key = group_key(spec, *request)
             if key == "motor":
@@ -91,6 +120,12 @@ class BatchedScene:
                 path = surface.path
                 motor_key = (path.kind, len(path.nodes), path.closed, path.weights, spec.closed) + request[:2]
                 motors.setdefault(motor_key, []).append((index, surface))
+            elif key == "ribbon":
+                try:
+                    surface = build_surface(spec)
+                except CgameshError:
+                    continue  # the per-surface path names the error
+                ribbons.setdefault((surface.curve, spec.closed) + request[:2], []).append((index, surface))
             elif key is not None:
                 blades.setdefault(key, []).append(index)
         chunks = []
@@ -116,6 +151,12 @@ class BatchedScene:
                                      MotorSampler([surface.path for surface in surfaces]),
                                      np.array([surface.frame.origin for surface in surfaces]),
                                      np.array([surface.frame.scale for surface in surfaces]), closed, around, along))
+        for (_, closed, around, along), members in ribbons.items():
+            size = max(1, min(CHUNK_RINGS // along, CHUNK_VERTICES // (around * along)))
+            for start in range(0, len(members), size):
+                part = members[start: start + size]
+                chunks.append(_RibbonChunk([i for i, _ in part], [surface for _, surface in part],
+                                           closed, around, along))
         return cls(chunks, tangents)
 
     def takes(self, index: int) -> bool:
@@ -125,10 +166,7 @@ class BatchedScene:
     def mesh(self, index: int) -> SurfaceMesh | None:
         chunk = self._chunk_of[index]
         if chunk.meshes is None:
-            meshed = mesh_circle_group(chunk.names, chunk.sampler, chunk.origin, chunk.scale, chunk.closed,
-                                       chunk.around, chunk.along, self._tangents, chunk.caps)
-            chunk.meshes = dict(zip(chunk.indices, meshed))
-            chunk.sampler = None  # the controls are no longer needed
+            chunk.meshes = dict(zip(chunk.indices, chunk.mesh_all(self._tangents)))
         return chunk.meshes.pop(index)
 
     @property
