@@ -127,21 +127,21 @@ def execute(client, pending: Sequence[Input], options: dict, job: Callable = run
                for index, item in enumerate(pending)}
     for future in as_completed(futures):
         item = futures.pop(future)
-        if future.status == "finished":
+        try:
+            # a finished result held only by a worker that died since is "lost", not failed: the
+            # scheduler computes it again, and result() waits for that
             outcome = future.result()
-        else:
-            outcome = {"status": "failed", "reason": _task_failure(future), "sha256": "", "seconds": 0.0,
+        except (KeyboardInterrupt, SystemExit):
+            raise
+        except BaseException as error:  # raised after its retries, its worker died, or cancelled
+            outcome = {"status": "failed", "reason": _task_failure(error), "sha256": "", "seconds": 0.0,
                        "vertices": 0, "bytes": 0}
         future.release()
         yield item, outcome
 
 
-def _task_failure(future) -> str:
+def _task_failure(error: BaseException) -> str:
     """One line saying why a task produced no result."""
-    try:
-        error = future.exception()
-    except BaseException as cancelled:  # a future cancelled by the scheduler has no exception
-        error = cancelled
     if type(error).__name__ == "KilledWorker":
         return ("its worker process died each time it meshed this input (memory limit exceeded, or "
                 "killed); see the workers' logs")
