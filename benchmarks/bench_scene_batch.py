@@ -34,6 +34,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_scene_reader import flow_style, scene_document  # noqa: E402
+from timing import best_of  # noqa: E402 (this script's folder is on sys.path)
 
 from cgamesh.inputs.scene import load_scene  # noqa: E402
 from cgamesh.pipeline import Resolution, _batched_share, mesh_scene  # noqa: E402
@@ -68,15 +69,6 @@ def ribbon_document(count: int, controls: int, seed: int = 1) -> str:
     return "\n".join(lines) + "\n"
 
 
-def cpu_best(repeats: int, work):
-    best, result = float("inf"), None
-    for _ in range(repeats):
-        start = time.process_time()
-        result = work()
-        best = min(best, time.process_time() - start)
-    return best, result
-
-
 def same(first, second) -> bool:
     for (a, _), (b, _) in zip(first, second):
         for name in FIELDS:
@@ -106,8 +98,8 @@ def main(argv=None) -> int:
     count = len(scene.surfaces)
     share = _batched_share(scene.surfaces, Resolution(), False)
     taken = sum(1 for i in range(count) if share.takes(i) and share.mesh(i) is not None)
-    alone, reference = cpu_best(args.repeats, lambda: mesh_scene(scene, batched=False))
-    batched, meshes = cpu_best(args.repeats, lambda: mesh_scene(scene, batched=True))
+    alone, reference = best_of(args.repeats, lambda: mesh_scene(scene, batched=False), clock=time.process_time)
+    batched, meshes = best_of(args.repeats, lambda: mesh_scene(scene, batched=True), clock=time.process_time)
     what = "ribbons" if args.kind == "ribbon" else "tubes"
     interpolation = "blade" if args.kind == "ribbon" else args.interpolation
     print(f"{count} {what} of {args.controls} controls, {interpolation} interpolation; "
