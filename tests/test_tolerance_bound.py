@@ -88,6 +88,19 @@ def test_ribbon_bound_is_never_exceeded(log_scale, distance, curve, count, twist
     assert measured(surface, plan, "point_pairs") <= plan.bound
 
 
+def tilted_flaring_tube(log_scale, distance, curve, count, tilt, flare, seed):
+    """(centres, normals, radii, weights) of a random tube of size 10^log_scale at ``distance``
+    from the origin, its circles tilted against the path by up to ``tilt`` and its radii changed
+    by up to 10^flare between controls (weights for a rational Bezier curve, else None)."""
+    rng = np.random.default_rng(seed)
+    offset = distance * rng.normal(size=3) / np.sqrt(3.0)
+    centres, normals, radii = tube(10.0**log_scale, offset, count if curve != "catmull_rom" else max(count, 3), rng)
+    normals = normals + tilt * rng.normal(size=normals.shape)
+    radii = radii * 10.0 ** rng.uniform(-flare, flare, size=len(radii))
+    weights = list(10.0 ** rng.uniform(-1.0, 1.0, size=len(radii))) if curve == "rational_bezier" else None
+    return centres, normals, radii, weights
+
+
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 2**32 - 1), log_relative=st.floats(-3.0, -1.5))
 def test_closed_loop_bound_is_never_exceeded(seed, log_relative):
@@ -116,12 +129,7 @@ def test_tilted_flaring_tube_bound_is_never_exceeded(log_scale, distance, curve,
     """Circles tilted against their path (the twist's normal part grows with the tilt), radii
     changing by up to 5x between controls (the shear around the ring), blade and motor
     interpolation: the bound with the twist's normal part still covers the measured deviation."""
-    rng = np.random.default_rng(seed)
-    offset = distance * rng.normal(size=3) / np.sqrt(3.0)
-    centres, normals, radii = tube(10.0**log_scale, offset, count if curve != "catmull_rom" else max(count, 3), rng)
-    normals = normals + tilt * rng.normal(size=normals.shape)
-    radii = radii * 10.0 ** rng.uniform(-flare, flare, size=len(radii))
-    weights = list(10.0 ** rng.uniform(-1.0, 1.0, size=len(radii))) if curve == "rational_bezier" else None
+    centres, normals, radii, weights = tilted_flaring_tube(log_scale, distance, curve, count, tilt, flare, seed)
     spec = replace(spec_of(centres, normals, radii, curve=curve, weights=weights), interpolation=interpolation)
     surface = build_surface(spec)
     tolerance = 10.0**log_relative * surface.frame.scale
@@ -142,12 +150,7 @@ def test_the_normal_projection_bounds_every_interval_alone(log_scale, distance, 
     from cgamesh.meshing import tolerance_plan
     from cgamesh.meshing.normal_projection import normal_projection_error
 
-    rng = np.random.default_rng(seed)
-    offset = distance * rng.normal(size=3) / np.sqrt(3.0)
-    centres, normals, radii = tube(10.0**log_scale, offset, count if curve != "catmull_rom" else max(count, 3), rng)
-    normals = normals + tilt * rng.normal(size=normals.shape)
-    radii = radii * 10.0 ** rng.uniform(-flare, flare, size=len(radii))
-    weights = list(10.0 ** rng.uniform(-1.0, 1.0, size=len(radii))) if curve == "rational_bezier" else None
+    centres, normals, radii, weights = tilted_flaring_tube(log_scale, distance, curve, count, tilt, flare, seed)
     surface = build_surface(spec_of(centres, normals, radii, curve=curve, weights=weights))
     prepared = tolerance_plan.PreparedPlan(surface, 10.0**log_relative * surface.frame.scale, "circles")
     plan = prepared.place()
