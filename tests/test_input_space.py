@@ -12,7 +12,6 @@ errors. A second property writes every output format.
 
 from __future__ import annotations
 
-import math
 import os
 import warnings
 
@@ -21,19 +20,17 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+from direction_strategies import coordinate, direction, sphere_direction
+
 from cgamesh.errors import InvalidInputError
 from cgamesh.inputs.scene import parse_scene
 from cgamesh.pipeline import Resolution, mesh_scene
 
 CURVES = ("linear", "bezier", "rational_bezier", "kb", "catmull_rom")
-AXES = [(1.0, 0.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, 1.0), (0.0, 0.0, -1.0)]
 # A modest count keeps the suite fast; CGAMESH_PROPERTY_EXAMPLES asks for a longer search.
 EXAMPLES = int(os.environ.get("CGAMESH_PROPERTY_EXAMPLES", "40"))
 PROPERTY = settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
-coordinate = st.floats(-1.0, 1.0, allow_nan=False)
-sphere_direction = st.tuples(coordinate, coordinate, coordinate).filter(lambda v: math.hypot(*v) > 1e-3)
-direction = st.one_of(st.sampled_from(AXES), sphere_direction)
 
 
 @st.composite

@@ -15,7 +15,6 @@ Where the per-surface path refuses a scene, the batched path refuses it with the
 
 from __future__ import annotations
 
-import math
 import os
 import sys
 import warnings
@@ -25,6 +24,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
+
+from direction_strategies import coordinate, direction, sphere_direction
 
 from cgamesh.errors import CgameshError
 from cgamesh.inputs.scene import load_scene, parse_scene
@@ -196,10 +197,6 @@ def test_a_refusal_is_the_per_surface_paths():
     assert "two.yaml" in str(alone) and "opposite" in str(alone)
 
 
-AXES = [(1.0, 0.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, 1.0), (0.0, 0.0, -1.0)]
-coordinate = st.floats(-1.0, 1.0, allow_nan=False)
-sphere_direction = st.tuples(coordinate, coordinate, coordinate).filter(lambda v: math.hypot(*v) > 1e-3)
-direction = st.one_of(st.sampled_from(AXES), sphere_direction)
 
 
 @st.composite
