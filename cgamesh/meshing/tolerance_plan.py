@@ -42,6 +42,7 @@ from cgamesh.meshing.circles import transported_frames
 from cgamesh.meshing.dense_transport import transported_axes
 from cgamesh.meshing.derivative_bounds import cell_bounds, cell_derivatives, segment_samples
 from cgamesh.meshing.normal_projection import normal_projection_error, normal_projection_spacing
+from cgamesh.meshing.ribbon_twist import ribbon_twist_error, ribbon_twist_quadratic, ribbon_twist_terms
 
 # Cells per segment of the derivative sampling: at least this many, and about this many per
 # ring of a first estimate (the Lipschitz margin shrinks with the cells; the cost grows).
@@ -190,10 +191,13 @@ def _ribbon_cells(surface: EvolvedSurface, cells: int) -> _Cells:
     a, b = point_pair_endpoints(_read(surface, t.ravel()))
     shape = t.shape + (3,)
     scale = surface.frame.scale
-    _, _, a2 = cell_bounds(a.reshape(shape))
-    _, _, b2 = cell_bounds(b.reshape(shape))
-    _, d1, _ = cell_bounds((b - a).reshape(shape))
-    return _Cells(cells, dict(A=scale * np.maximum(a2, b2), B=scale * d1), 0.0)
+    ends, other, across = (cell_derivatives(x.reshape(shape)) for x in (a, b, b - a))
+    _, _, a2 = ends.norms()
+    _, _, b2 = other.norms()
+    _, d1, _ = across.norms()
+    terms = dict(A=scale * np.maximum(a2, b2), B=scale * d1)
+    terms.update(ribbon_twist_terms(ends, other, across, (b - a).reshape(shape), scale))
+    return _Cells(cells, terms, 0.0)
 
 
 def _circle_error(terms: dict, h, around, rate: float, wide: dict | None = None):
@@ -264,7 +268,10 @@ def _normal_twist_terms(terms: dict, around, a, b, spin, spin_rate):
 
 
 def _ribbon_error(terms: dict, h, across, rate: float = 0.0):
-    return terms["A"] * h * h / 8.0 + terms["B"] * h / (4.0 * (across - 1))
+    """E of ribbon quads: the lemma's bound, or the one without the twist's tangential part
+    (cgamesh.meshing.ribbon_twist) where that is smaller."""
+    full = terms["A"] * h * h / 8.0 + terms["B"] * h / (4.0 * (across - 1))
+    return np.minimum(full, ribbon_twist_error(terms, h, across))
 
 
 def _circle_spacing(terms: dict, around, tolerance: float, rate: float):
@@ -283,7 +290,13 @@ def _circle_spacing(terms: dict, around, tolerance: float, rate: float):
 
 
 def _ribbon_spacing(terms: dict, across, tolerance: float, rate: float = 0.0):
-    return _root(terms["A"] / 8.0, terms["B"] / (4.0 * (across - 1)), np.full(np.shape(terms["A"]), tolerance))
+    c = np.full(np.shape(terms["A"]), tolerance)
+    full = _root(terms["A"] / 8.0, terms["B"] / (4.0 * (across - 1)), c)
+    square, linear, valid = ribbon_twist_quadratic(terms, across)
+    with np.errstate(divide="ignore"):
+        longest = 1.0 / terms["Gs"]  # the bubble's condition h |gamma_s| <= 1
+    twist = np.where(valid, np.minimum(_root(np.where(valid, square, 1.0), np.where(valid, linear, 1.0), c), longest), 0.0)
+    return np.maximum(full, twist)
 
 
 def _root(a, b, c):
