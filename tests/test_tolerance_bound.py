@@ -68,20 +68,10 @@ def test_tube_bound_is_never_exceeded(log_scale, distance, curve, count, log_rel
 
 @PROPERTIES
 @given(log_scale=st.floats(-4.0, 4.0), distance=st.floats(0.0, 1e5), curve=st.sampled_from(CURVES),
-       count=st.integers(2, 5), twist=st.floats(0.0, 2.5), log_relative=st.floats(-3.0, -1.0),
+       count=st.integers(2, 5), twist=st.floats(0.0, 2.5), flat=st.booleans(), log_relative=st.floats(-3.0, -1.0),
        seed=st.integers(0, 2**32 - 1))
-def test_ribbon_bound_is_never_exceeded(log_scale, distance, curve, count, twist, log_relative, seed):
-    rng = np.random.default_rng(seed)
-    count = max(count, 3) if curve == "catmull_rom" else count
-    scale = 10.0**log_scale
-    offset = distance * rng.normal(size=3) / np.sqrt(3.0)
-    angle = twist * np.arange(count) / max(count - 1, 1) + 0.2 * rng.normal(size=count)
-    height = np.cumsum(rng.uniform(0.5, 1.5, size=count)) * scale
-    half = scale * rng.uniform(0.5, 1.5, size=count)
-    middle = offset + np.stack([0.2 * scale * rng.normal(size=count), 0.2 * scale * rng.normal(size=count), height], 1)
-    across = np.stack([np.cos(angle), np.sin(angle), np.zeros(count)], axis=1) * half[:, None]
-    weights = list(10.0 ** rng.uniform(-1.0, 1.0, size=count)) if curve == "rational_bezier" else None
-    surface = build_surface(ribbon_spec(middle - across, middle + across, curve, weights))
+def test_ribbon_bound_is_never_exceeded(log_scale, distance, curve, count, twist, flat, log_relative, seed):
+    surface = random_ribbon(log_scale, distance, curve, count, twist, flat, seed)
     tolerance = 10.0**log_relative * surface.frame.scale
     plan = plan_tolerance(surface, tolerance, "point_pairs")
     assert plan.bound <= tolerance
