@@ -74,29 +74,42 @@ def ribbon_twist_terms(a: CellDerivatives, b: CellDerivatives, d: CellDerivative
         normal = np.where(fold, np.inf, det / least)
         gamma_t = np.where(fold, np.inf, speed * longest / least)
         gamma_s = np.where(fold | (shortest <= 0.0), np.inf, (speed + gamma_t * along) / shortest)
-    return dict(Nt=scale * normal, Gt=gamma_t, Gs=gamma_s, D2=scale * d2)
+        # gamma = (0, d' . d / |d|^2) removes only the rulings' stretching: no fold condition, and
+        # what is left, d' across d, is |d x d'| / |d|.
+        across = np.where(shortest > 0.0, (_norm(np.cross(centre, e1)) + rho * speed + _norm(centre) * re) / shortest,
+                          np.inf)
+        stretch = np.where(shortest > 0.0, speed / shortest, np.inf)
+    return dict(Nt=scale * normal, Gt=gamma_t, Gs=gamma_s, D2=scale * d2, Nx=scale * across, Gx=stretch)
 
 
 def ribbon_twist_error(terms: dict, h, across):
     """The bound of each quad's error by the bubble reparametrisation (inf where it does not apply:
     a possible fold, kappa |gamma_t| > 1 or h |gamma_s| > 1). terms: maxima over the quad's cells of
     A >= |x_tt|, B >= |d'| and those of ``ribbon_twist_terms``."""
-    square, linear, valid = ribbon_twist_quadratic(terms, across)
-    with np.errstate(invalid="ignore", over="ignore"):
-        valid = valid & (h * terms["Gs"] <= 1.0)
-        return np.where(valid, square * h * h + linear * h, np.inf)
+    error = np.inf
+    for stretch_only in (False, True):
+        square, linear, valid = ribbon_twist_quadratic(terms, across, stretch_only)
+        with np.errstate(invalid="ignore", over="ignore"):
+            valid = valid & (h * (terms["Gx"] if stretch_only else terms["Gs"]) <= 1.0)
+            error = np.minimum(error, np.where(valid, square * h * h + linear * h, np.inf))
+    return error
 
 
-def ribbon_twist_quadratic(terms: dict, across):
+def ribbon_twist_quadratic(terms: dict, across, stretch_only: bool = False):
     """(square, linear, valid): A^ h^2 / 8 + B^ h kappa / 4 + C^ kappa^2 / 8 = square h^2 + linear h
-    for g = x(Phi) (docs/tolerance.md, "The twist of ribbons"), valid where kappa |gamma_t| <= 1."""
+    for g = x(Phi) (docs/tolerance.md, "The twist of ribbons"), valid where kappa |gamma_t| <= 1.
+    stretch_only: gamma_t = 0, removing only the twist's part along the rulings."""
     kappa = 1.0 / (np.asarray(across, dtype=float) - 1.0)
-    a, b, gt, gs = terms["A"], terms["B"], terms["Gt"], terms["Gs"]
+    a, b = terms["A"], terms["B"]
+    if stretch_only:
+        gt, gs, left = np.zeros_like(terms["Gx"]), terms["Gx"], terms["Nx"]
+    else:
+        gt, gs, left = terms["Gt"], terms["Gs"], terms["Nt"]
     with np.errstate(invalid="ignore", over="ignore"):
         a_hat = (1.0 + kappa * gt) ** 2 * a + 2.0 * (1.0 + kappa * gt) * kappa * gs * b
         # B^ = b0 + h b1: the normal twist at q0 and the residual's change over the quad (half the
         # quad each way), plus what Phi's slopes add; C^ = h c1 + h^2 c2.
-        b0 = terms["Nt"] + 1.5 * kappa * gt * b
+        b0 = left + 1.5 * kappa * gt * b
         b1 = (0.5 * terms["D2"] + 0.5 * gt * a + 1.5 * gs * b + 2.0 * kappa * gt * gs * b + (1.0 + kappa * gt) * gt * a)
         c1 = 2.0 * gt * b
         c2 = gt * gt * a + 2.0 * gt * gs * b

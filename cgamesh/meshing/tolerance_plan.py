@@ -292,11 +292,13 @@ def _circle_spacing(terms: dict, around, tolerance: float, rate: float):
 def _ribbon_spacing(terms: dict, across, tolerance: float, rate: float = 0.0):
     c = np.full(np.shape(terms["A"]), tolerance)
     full = _root(terms["A"] / 8.0, terms["B"] / (4.0 * (across - 1)), c)
-    square, linear, valid = ribbon_twist_quadratic(terms, across)
-    with np.errstate(divide="ignore"):
-        longest = 1.0 / terms["Gs"]  # the bubble's condition h |gamma_s| <= 1
-    twist = np.where(valid, np.minimum(_root(np.where(valid, square, 1.0), np.where(valid, linear, 1.0), c), longest), 0.0)
-    return np.maximum(full, twist)
+    for stretch_only in (False, True):
+        square, linear, valid = ribbon_twist_quadratic(terms, across, stretch_only)
+        with np.errstate(divide="ignore"):
+            longest = 1.0 / terms["Gx" if stretch_only else "Gs"]  # the bubble's condition h |gamma_s| <= 1
+        root = _root(np.where(valid, square, 1.0), np.where(valid, linear, 1.0), c)
+        full = np.maximum(full, np.where(valid, np.minimum(root, longest), 0.0))
+    return full
 
 
 def _root(a, b, c):
