@@ -17,6 +17,8 @@ count only the twist's part across the surface: a reparametrisation of each tria
 its shear along P_t and P_theta (docs/tolerance.md, "The twist's normal part"), and the error
 is projected on the surface's normal, its tangential part costing only the curvature over a
 short step (cgamesh.meshing.normal_projection): an interval's E is the smallest of the three.
+For ribbons the bubble removes the twist's tangential part, or only the rulings' stretching
+(cgamesh.meshing.ribbon_twist): E is the smallest of the lemma's and those.
 
 From these, per cell and for each candidate count around, the spacing h whose bound meets the
 tolerance gives a ring density 1 / h; its integral per segment is the ring count, so the count
