@@ -117,3 +117,16 @@ def ribbon_twist_quadratic(terms: dict, across, stretch_only: bool = False):
         linear = kappa / 4.0 * b0 + kappa * kappa / 8.0 * c1
         valid = (kappa * gt <= 1.0) & np.isfinite(square) & np.isfinite(linear)
     return np.where(valid, square, 0.0), np.where(valid, linear, 0.0), valid
+
+
+def ribbon_twist_spacing(terms: dict, across, tolerance, root):
+    """Per cell the largest spacing h at which a bubble's bound meets the tolerance (0 where
+    neither applies); root(a, b, c) solves a h^2 + b h = c."""
+    spacing = 0.0
+    for stretch_only in (False, True):
+        square, linear, valid = ribbon_twist_quadratic(terms, across, stretch_only)
+        with np.errstate(divide="ignore"):
+            longest = 1.0 / terms["Gx" if stretch_only else "Gs"]  # the condition h |gamma_s| <= 1
+        h = root(np.where(valid, square, 1.0), np.where(valid, linear, 1.0), tolerance)
+        spacing = np.maximum(spacing, np.where(valid, np.minimum(h, longest), 0.0))
+    return spacing

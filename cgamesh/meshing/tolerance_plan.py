@@ -44,7 +44,7 @@ from cgamesh.meshing.circles import transported_frames
 from cgamesh.meshing.dense_transport import transported_axes
 from cgamesh.meshing.derivative_bounds import cell_bounds, cell_derivatives, segment_samples
 from cgamesh.meshing.normal_projection import normal_projection_error, normal_projection_spacing
-from cgamesh.meshing.ribbon_twist import ribbon_twist_error, ribbon_twist_quadratic, ribbon_twist_terms
+from cgamesh.meshing.ribbon_twist import ribbon_twist_error, ribbon_twist_spacing, ribbon_twist_terms
 
 # Cells per segment of the derivative sampling: at least this many, and about this many per
 # ring of a first estimate (the Lipschitz margin shrinks with the cells; the cost grows).
@@ -294,13 +294,7 @@ def _circle_spacing(terms: dict, around, tolerance: float, rate: float):
 def _ribbon_spacing(terms: dict, across, tolerance: float, rate: float = 0.0):
     c = np.full(np.shape(terms["A"]), tolerance)
     full = _root(terms["A"] / 8.0, terms["B"] / (4.0 * (across - 1)), c)
-    for stretch_only in (False, True):
-        square, linear, valid = ribbon_twist_quadratic(terms, across, stretch_only)
-        with np.errstate(divide="ignore"):
-            longest = 1.0 / terms["Gx" if stretch_only else "Gs"]  # the bubble's condition h |gamma_s| <= 1
-        root = _root(np.where(valid, square, 1.0), np.where(valid, linear, 1.0), c)
-        full = np.maximum(full, np.where(valid, np.minimum(root, longest), 0.0))
-    return full
+    return np.maximum(full, ribbon_twist_spacing(terms, across, c, _root))
 
 
 def _root(a, b, c):
