@@ -17,6 +17,8 @@ count only the twist's part across the surface: a reparametrisation of each tria
 its shear along P_t and P_theta (docs/tolerance.md, "The twist's normal part"), and the error
 is projected on the surface's normal, its tangential part costing only the curvature over a
 short step (cgamesh.meshing.normal_projection): an interval's E is the smallest of the three.
+For ribbons the bubble removes the twist's tangential part, or only the rulings' stretching
+(cgamesh.meshing.ribbon_twist): E is the smallest of the lemma's and those.
 
 From these, per cell and for each candidate count around, the spacing h whose bound meets the
 tolerance gives a ring density 1 / h; its integral per segment is the ring count, so the count
@@ -42,6 +44,7 @@ from cgamesh.meshing.circles import transported_frames
 from cgamesh.meshing.dense_transport import transported_axes
 from cgamesh.meshing.derivative_bounds import cell_bounds, cell_derivatives, segment_samples
 from cgamesh.meshing.normal_projection import normal_projection_error, normal_projection_spacing
+from cgamesh.meshing.ribbon_twist import ribbon_twist_error, ribbon_twist_spacing, ribbon_twist_terms
 
 # Cells per segment of the derivative sampling: at least this many, and about this many per
 # ring of a first estimate (the Lipschitz margin shrinks with the cells; the cost grows).
@@ -190,10 +193,13 @@ def _ribbon_cells(surface: EvolvedSurface, cells: int) -> _Cells:
     a, b = point_pair_endpoints(_read(surface, t.ravel()))
     shape = t.shape + (3,)
     scale = surface.frame.scale
-    _, _, a2 = cell_bounds(a.reshape(shape))
-    _, _, b2 = cell_bounds(b.reshape(shape))
-    _, d1, _ = cell_bounds((b - a).reshape(shape))
-    return _Cells(cells, dict(A=scale * np.maximum(a2, b2), B=scale * d1), 0.0)
+    ends, other, across = (cell_derivatives(x.reshape(shape)) for x in (a, b, b - a))
+    _, _, a2 = ends.norms()
+    _, _, b2 = other.norms()
+    _, d1, _ = across.norms()
+    terms = dict(A=scale * np.maximum(a2, b2), B=scale * d1)
+    terms.update(ribbon_twist_terms(ends, other, across, (b - a).reshape(shape), scale))
+    return _Cells(cells, terms, 0.0)
 
 
 def _circle_error(terms: dict, h, around, rate: float, wide: dict | None = None):
@@ -264,7 +270,10 @@ def _normal_twist_terms(terms: dict, around, a, b, spin, spin_rate):
 
 
 def _ribbon_error(terms: dict, h, across, rate: float = 0.0):
-    return terms["A"] * h * h / 8.0 + terms["B"] * h / (4.0 * (across - 1))
+    """E of ribbon quads: the lemma's bound, or the one without the twist's tangential part
+    (cgamesh.meshing.ribbon_twist) where that is smaller."""
+    full = terms["A"] * h * h / 8.0 + terms["B"] * h / (4.0 * (across - 1))
+    return np.minimum(full, ribbon_twist_error(terms, h, across))
 
 
 def _circle_spacing(terms: dict, around, tolerance: float, rate: float):
@@ -283,7 +292,9 @@ def _circle_spacing(terms: dict, around, tolerance: float, rate: float):
 
 
 def _ribbon_spacing(terms: dict, across, tolerance: float, rate: float = 0.0):
-    return _root(terms["A"] / 8.0, terms["B"] / (4.0 * (across - 1)), np.full(np.shape(terms["A"]), tolerance))
+    c = np.full(np.shape(terms["A"]), tolerance)
+    full = _root(terms["A"] / 8.0, terms["B"] / (4.0 * (across - 1)), c)
+    return np.maximum(full, ribbon_twist_spacing(terms, across, c, _root))
 
 
 def _root(a, b, c):
