@@ -47,8 +47,9 @@ def test_batched_run_within_its_estimate_and_proportional_to_output(tmp_path):
     assert estimated_vertices >= vertices
     assert peak <= estimate, (peak, estimate)
     # the merged float64 mesh is about twice the file and a chunk comes on top; no weld is
-    # made (measured 2.3x traced here, 3.1x while the merge welded)
-    assert peak <= 2.8 * written, (peak, written)
+    # made (measured 2.05x traced here since a chunk frees its per-ring arrays early, 2.3x
+    # before, 3.1x while the merge welded)
+    assert peak <= 2.4 * written, (peak, written)
     # doubling the input doubles the peak, not more (nothing held per piece beyond the mesh)
     peak_twice, _, written_twice = _peak_of_run(_repeated(8), tmp_path / "twice.glb")
     assert peak_twice <= 2.3 * peak, (peak_twice, peak)
@@ -57,6 +58,7 @@ def test_batched_run_within_its_estimate_and_proportional_to_output(tmp_path):
     peak_held, _, written_held = _peak_of_run(lines, tmp_path / "held.glb", as_written=True)
     assert written_held == written
     assert (tmp_path / "held.glb").read_bytes() == (tmp_path / "bundle.glb").read_bytes()
-    # 20 bytes a vertex less held (normals 24 -> 12, radius and segment 8 -> 4); measured 2.0x
+    # 20 bytes a vertex less held (normals 24 -> 12, radius and segment 8 -> 4); measured 1.71x
+    # (2.0x before a chunk's scratch was trimmed)
     assert peak_held <= peak - 15 * vertices, (peak_held, peak, vertices)
-    assert peak_held <= 2.3 * written, (peak_held, written)
+    assert peak_held <= 2.0 * written, (peak_held, written)

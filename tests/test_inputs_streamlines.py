@@ -30,6 +30,37 @@ def test_trk_and_tck_read_the_points_nibabel_reads():
         assert lines.units == "mm" and lines.radii is None
 
 
+ALONE = """
+import json, sys
+import numpy as np
+from cgamesh.inputs.streamlines import read_streamlines
+paths = sys.argv[1:]
+alone = [read_streamlines(p) for p in paths]
+left = sorted(m for m in sys.modules if m.split(".")[0] in ("nibabel", "scipy"))
+import nibabel  # afterwards the real package, whole
+whole = [read_streamlines(p) for p in paths]
+def same(a, b):
+    return (np.array_equal(a.points, b.points) and np.array_equal(a.offsets, b.offsets)
+            and a.scalars.keys() == b.scalars.keys() and all(np.array_equal(a.scalars[k], b.scalars[k]) for k in a.scalars))
+print(json.dumps({"left": left, "same": all(same(a, b) for a, b in zip(alone, whole)),
+                  "scalars": sorted(set().union(*(a.scalars for a in alone))),
+                  "whole": hasattr(nibabel, "Nifti1Image") and hasattr(nibabel.streamlines, "load")}))
+"""
+
+
+def test_trk_and_tck_are_read_without_nibabel_s_image_formats_and_the_same_as_through_the_whole_package():
+    """A process that has not imported nibabel reads through nibabel.streamlines alone (no scipy,
+    no image formats, nothing of nibabel left in sys.modules); the package imported afterwards
+    is whole and reads the same points, offsets and scalars."""
+    names = ("standard.trk", "complex.trk", "complex_big_endian.trk", "standard.tck", "simple.tck")
+    result = subprocess.run([sys.executable, "-c", ALONE, *(str(realdata_files.nibabel_file(n)) for n in names)],
+                            capture_output=True, text=True, check=True, timeout=120)
+    report = __import__("json").loads(result.stdout.strip().splitlines()[-1])
+    assert report["left"] == []
+    assert report["whole"] and report["same"]
+    assert report["scalars"] != []  # complex.trk's per-point fields came through both ways
+
+
 def test_trx_reads_the_same_streamlines_as_the_trk_it_was_made_from(tmp_path):
     trx = pytest.importorskip("trx.trx_file_memmap")
     source = realdata_files.nibabel_file("complex.trk")

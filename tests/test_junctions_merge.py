@@ -58,3 +58,31 @@ def test_merge_offsets_faces_and_keeps_colours_and_shared_attributes():
     assert len(top_of_a) == 2 * 5 and len(set(weld_by_position(merged.positions)[top_of_a].tolist())) == 1
     # without colours on every piece, none
     assert merge([a, b2], "mixed").colors is None
+
+
+@pytest.mark.parametrize("color_by", ["direction", "radius"])
+def test_spheres_merged_a_block_at_a_time_are_the_spheres_merged_whole(color_by, monkeypatch):
+    """A merged run hands the junction and soma spheres over SPHERE_BLOCK at a time: the merged
+    mesh is the one made from each group's whole mesh, bit for bit (blocks of 7 on a neuron with
+    hundreds of junctions and a soma of twelve nodes, against one block)."""
+    from dataclasses import replace
+
+    import cgamesh.centerline_pipeline as pipeline
+    from cgamesh.inputs.centerlines import read_centerlines
+    from realdata_files import smallest_neuron
+
+    lines = read_centerlines(str(smallest_neuron()))
+    kinds = lines.kinds.copy()
+    kinds[:12] = pipeline.SOMA  # a soma of twelve nodes (this neuron's file has none)
+    lines = replace(lines, kinds=kinds)
+    options = pipeline.TubeOptions(radius=40.0, color_by=color_by)
+    monkeypatch.setattr(pipeline, "SPHERE_BLOCK", 10**9)
+    whole = pipeline.mesh_centerlines(lines, options, as_written=True).meshes[0]
+    monkeypatch.setattr(pipeline, "SPHERE_BLOCK", 7)
+    blocks = pipeline.mesh_centerlines(lines, options, as_written=True).meshes[0]
+    assert np.count_nonzero(lines.kinds == pipeline.SOMA) > 7  # the soma group is split as well
+    for channel in ("positions", "normals", "uvs", "faces", "colors"):
+        np.testing.assert_array_equal(getattr(blocks, channel), getattr(whole, channel))
+    assert sorted(blocks.attributes) == sorted(whole.attributes)
+    for key in whole.attributes:
+        np.testing.assert_array_equal(blocks.attributes[key], whole.attributes[key])

@@ -27,7 +27,7 @@ ATTRIBUTE_NAME = re.compile(r"[a-z][a-z0-9_]*")
 # Colours a mesh op interpolated may stray from [0, 1] by rounding; more than this is a bug.
 COLOR_RANGE_SLACK = 1e-9
 FLOAT32_MAX = float(np.finfo(np.float32).max)
-LENGTH_BLOCK = 1 << 16  # rows of normals measured at a time
+LENGTH_BLOCK = 1 << 13  # rows of normals measured at a time (their float64 squares: 200 kB)
 
 
 def check_arguments(path, surfaces: Sequence, up: str, meters_per_unit: float) -> float:

@@ -6,12 +6,24 @@ order and a .tck's header need no further care. Per-point data with one value a 
 multi-valued data are ignored. A file the library refuses (a .trk whose header and data
 disagree, a truncated file) is one line naming the file and what the library found; a
 streamline with a NaN or an infinite coordinate is one line naming its index.
+
+nibabel's package ``__init__`` imports every image format it reads (NIfTI, CIFTI's XML,
+MINC, FreeSurfer, GIFTI), scipy and OpenSSL's bindings: 13 MB of resident memory, more than a
+third of what meshing the fornix holds. Its ``streamlines`` subpackage needs none of that
+(two dozen of nibabel's modules, 2 MB), so ``.trk`` and ``.tck`` are read through
+``nibabel.streamlines`` imported on its own (``_streamline_reader``); a process that has
+imported nibabel already uses that.
 """
 
 from __future__ import annotations
 
+import importlib
+import importlib.util
 import os
+import sys
 import warnings
+from functools import cache
+from types import ModuleType
 
 import numpy as np
 
@@ -48,11 +60,11 @@ def read_streamlines(path: str | os.PathLike[str], units: str = "mm") -> Centerl
 
 
 def _read_nibabel(name: str):
-    nib = require("nibabel", "neuro", f"reading {os.path.basename(name)}")
+    reader = _streamline_reader(f"reading {os.path.basename(name)}")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # nibabel warns where the header and the data disagree
-            loaded = nib.streamlines.load(name)
+            loaded = reader.load(name)
     except Exception as error:  # nibabel's HeaderError, DataError, struct and numpy errors
         raise InvalidInputError(f"{name}: expected a valid {os.path.splitext(name)[1]} file: "
                                 f"{_one_line(error)}") from None
@@ -65,6 +77,38 @@ def _read_nibabel(name: str):
                                 f"the data holds {len(streamlines)}")
     per_point = {key: value.get_data() for key, value in tractogram.data_per_point.items()}
     return streamlines.get_data(), _boundaries(streamlines._offsets, streamlines._lengths), per_point
+
+
+def _streamline_reader(purpose: str) -> ModuleType:
+    """``nibabel.streamlines``, without running nibabel's package ``__init__`` (see the module)."""
+    if "nibabel" in sys.modules:  # imported already (or made unimportable): as it is
+        return require("nibabel", "neuro", purpose).streamlines
+    return _streamlines_alone() or require("nibabel", "neuro", purpose).streamlines
+
+
+@cache
+def _streamlines_alone() -> ModuleType | None:
+    """``nibabel.streamlines`` imported under a bare ``nibabel`` package module (its ``__path__``
+    and no ``__init__``), so only the modules it imports itself are loaded; None when nibabel
+    is missing or that import fails (then the whole package is imported, or its absence reported).
+
+    Every ``nibabel`` module loaded here is taken out of ``sys.modules`` again: a later ``import
+    nibabel`` in the process loads the real package and its modules afresh, consistently, and
+    nothing of nibabel's leaves this module (the reader returns plain arrays).
+    """
+    spec = importlib.util.find_spec("nibabel")
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    before = set(sys.modules)
+    sys.modules["nibabel"] = importlib.util.module_from_spec(spec)  # __path__ set, __init__ not run
+    try:
+        return importlib.import_module("nibabel.streamlines")
+    except Exception:  # a nibabel whose streamlines need the package's own names: the whole package
+        return None
+    finally:
+        for key in set(sys.modules) - before:
+            if key == "nibabel" or key.startswith("nibabel."):
+                del sys.modules[key]
 
 
 def _stated_count(name: str, header: dict) -> int | None:

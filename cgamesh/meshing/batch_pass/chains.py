@@ -179,14 +179,18 @@ def _junction_events(meshed, first, count, nodes, t, tangents, segment_of) -> No
 
 def _chain_meshes(members, result: TubeArrays, first, count, radii, t, scalar, nodes, chains, options, stem,
                   label_name) -> dict[int, SurfaceMesh]:
-    """Runs of consecutive chains (or, split, single chains) of one chunk as meshes, by first chain."""
+    """Runs of consecutive chains (or, split, single chains) of one chunk as meshes, by first chain.
+
+    A run's mesh carries no ``uv_lengths``: it goes into the merged mesh, which keeps none
+    (cgamesh.meshing.merge); a single chain's are its two lengths broadcast over its vertices,
+    as the per-chain mesher gives them."""
     keep = np.flatnonzero(~result.fallback)
     if not len(keep):
         return {}
     columns = options.around + 1
     # every vertex of a ring has the ring's values: they are computed once per ring, then repeated
-    ring_chain = members[result.vertex_chain[::columns]]
-    ring_s = result.ring_local[::columns] / (options.subdivide + 1)
+    ring_chain = members[result.ring_chain]
+    ring_s = result.ring_local / (options.subdivide + 1)
     attributes = {"radius": np.repeat(_interp(radii, first, count, ring_chain, ring_s), columns),
                   "segment": np.repeat(ring_chain.astype(np.float64), columns)}
     if scalar is not None:
@@ -195,39 +199,39 @@ def _chain_meshes(members, result: TubeArrays, first, count, radii, t, scalar, n
     if options.color_by == "direction":
         from cgamesh.meshing.colors import direction_colors
 
-        global_chain = members[result.vertex_chain]
-        s = result.ring_local / (options.subdivide + 1)
+        global_chain = np.repeat(ring_chain, columns)
+        s = np.repeat(result.ring_local, columns) / (options.subdivide + 1)
         along_t = np.stack([_interp(t[:, k], first, count, global_chain, s) for k in range(3)], axis=1)
+        del global_chain, s
         colors = direction_colors(along_t)  # any length; a zero one (a turn back) gets NAN_COLOR
-    vertex_counts = np.bincount(result.vertex_chain, minlength=len(members))
-    face_counts = np.bincount(result.face_chain, minlength=len(members))
+        del along_t
+    vertex_counts = np.bincount(result.ring_chain, minlength=len(members)) * columns
     v_start = np.concatenate([[0], np.cumsum(vertex_counts)])
-    f_start = np.concatenate([[0], np.cumsum(face_counts)])
-    uv_lengths = np.repeat(result.uv_lengths, vertex_counts, axis=0)
+    f_start = np.concatenate([[0], np.cumsum(result.face_counts)])
     if options.split:
         groups = [[k] for k in keep]
     else:  # runs of chains with consecutive indices
         breaks = np.flatnonzero(np.diff(members[keep]) != 1) + 1
         groups = np.split(keep, breaks)
+    strip = 2 * options.around  # triangles between two consecutive rings
     out = {}
-    face_offset = None
     for group in groups:
         lo, hi = int(group[0]), int(group[-1])
         vs, ve, fs, fe = v_start[lo], v_start[hi + 1], f_start[lo], f_start[hi + 1]
         if options.split:
-            faces = result.faces[fs:fe].astype(np.int32)
+            faces = result.faces[fs:fe]
             weld = _grid_weld(vertex_counts[lo] // columns, options.around, False)
             name = f"{stem}_{label_name(chains[int(members[lo])].label)}"
-        else:
-            if face_offset is None:  # each face's chain's first vertex in the chunk
-                face_offset = np.repeat(v_start[:-1], face_counts)
-            faces = np.add(result.faces[fs:fe], (face_offset[fs:fe] - vs)[:, None],
-                           out=np.empty((fe - fs, 3), dtype=np.int32), casting="unsafe")
-            weld = None
+            uv_lengths = np.broadcast_to(result.uv_lengths[lo], (ve - vs, 2))
+        else:  # each chain's local indices shifted, in place, by its first vertex in the run (per ring pair)
+            faces = result.faces[fs:fe]
+            shift = np.repeat(v_start[lo:hi + 1] - vs, result.face_counts[lo:hi + 1] // strip).astype(np.int32)
+            faces.reshape(-1, strip, 3)[...] += shift[:, None, None]
+            weld = uv_lengths = None
             name = stem
         out[int(members[lo])] = SurfaceMesh(
             name=name, positions=result.positions[vs:ve], normals=result.normals[vs:ve], uvs=result.uvs[vs:ve],
-            faces=faces, uv_lengths=uv_lengths[vs:ve], weld=weld,
+            faces=faces, uv_lengths=uv_lengths, weld=weld,
             colors=None if colors is None else colors[vs:ve],
             attributes={key: value[vs:ve] for key, value in attributes.items()})
     return out

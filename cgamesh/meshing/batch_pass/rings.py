@@ -66,19 +66,21 @@ class _BladeRings:
 class TubeArrays:
     """The tubes of the chains not marked ``fallback``, chain after chain.
 
-    positions, normals (V, 3); uvs (V, 2); faces (F, 3) int64, indices local to each chain;
-    face_chain (F,), vertex_chain (V,) the chain of each face and vertex; ring_local (V,) the
-    ring index of each vertex within its chain; uv_lengths (C, 2) per chain (circumference,
-    length); fallback (C,) chains left to the per-chain path (they have no vertices here).
+    positions, normals (V, 3); uvs (V, 2); faces (F, 3) int32, indices local to each chain, in
+    (F / (2 around)) rows of 2 around triangles, one row per pair of consecutive rings;
+    ring_chain (R,), ring_local (R,) the chain of each kept ring and its index within its chain
+    (a ring's around + 1 vertices are consecutive); face_counts (C,) triangles per chain;
+    uv_lengths (C, 2) per chain (circumference, length); fallback (C,) chains left to the
+    per-chain path (they have no vertices here).
     """
 
     positions: np.ndarray
     normals: np.ndarray
     uvs: np.ndarray
     faces: np.ndarray
-    face_chain: np.ndarray
-    vertex_chain: np.ndarray
+    ring_chain: np.ndarray
     ring_local: np.ndarray
+    face_counts: np.ndarray
     uv_lengths: np.ndarray
     fallback: np.ndarray
 
@@ -108,7 +110,12 @@ def _padded_rows(first: np.ndarray, count: np.ndarray):
 
 def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, around: int,
                 subdivide: int) -> TubeArrays:
-    """Tubes of ``around`` vertices per ring and ``subdivide`` rings between nodes for every chain."""
+    """Tubes of ``around`` vertices per ring and ``subdivide`` rings between nodes for every chain.
+
+    Each ring's circle, axes and normal field (about 900 bytes a ring) are let go as soon as
+    the vertices are made from them, before the faces and UVs: a chunk's scratch is then
+    mostly its vertices (cgamesh.budget prices the chunk by it).
+    """
     nodes = motions.nodes
     chains = len(nodes.count)
     segments = nodes.count - 1
@@ -118,24 +125,27 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     ring_first = np.concatenate([[0], np.cumsum(along)[:-1]])
     ring_local = np.arange(len(t)) - ring_first[ring_chain]
     segment = np.clip(np.floor(t), 0, segments[ring_chain] - 1).astype(np.int64)
-    s = t - segment
-    state = motions.evaluate(nodes.span_first[ring_chain] + segment, s)
-    o, sc = origin[ring_chain], scale[ring_chain]
+    state = motions.evaluate(nodes.span_first[ring_chain] + segment, t - segment)
     # Read out of the circle blades, as the per-chain path does: the motion's own centre,
     # normal and point velocity are cheaper but round differently (normals up to 4e-10 apart
     # where the normal field is nearly degenerate), and this pass reproduces that path.
-    rings = _BladeRings.of(state, o, sc)
+    rings = _BladeRings.of(state, origin[ring_chain], scale[ring_chain])
+    del state, segment
 
     u, v = transported_axes(rings.normal, ring_local)  # circles.transported_frames, open chains
 
     field = RingNormals.of(rings, u, v)
-    stationary = field.speed <= STATIONARY_FRACTION * rings.radius
+    centre, radius = rings.centre, rings.radius
+    del rings  # its bivector rows served the velocities
+    stationary = field.speed <= STATIONARY_FRACTION * radius
     fallback |= np.bincount(ring_chain[stationary], minlength=chains) > 0
 
     theta = 2.0 * np.pi * np.arange(around + 1) / around
     circle_basis = np.stack([np.ones_like(theta), np.cos(theta), np.sin(theta)], axis=1)
-    placement = np.stack([rings.centre, rings.radius[:, None] * u, rings.radius[:, None] * v], axis=1)
+    placement = np.stack([centre, radius[:, None] * u, radius[:, None] * v], axis=1)
+    del u, v
     positions = normal_field.expand(placement, circle_basis)
+    del placement
     normals, smallest, near_zero = normal_field.unit_normals(field.raw, theta, field.speed, NEAR_ZERO_FRACTION)
     fallback |= np.bincount(ring_chain[near_zero[0]], minlength=chains) > 0
 
@@ -151,6 +161,7 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
         row_of[near] = np.arange(len(near))
         pairs = np.flatnonzero((row_of[:-1] >= 0) & (row_of[1:] >= 0))
         agreement[pairs] = np.einsum("kmc,kmc->k", unit[row_of[pairs]], unit[row_of[pairs + 1]]) / len(theta)
+        del values, unit
     within = ring_chain[:-1] == ring_chain[1:]
     fallback |= np.bincount(ring_chain[:-1][within & (agreement < -FOLD_AGREEMENT)], minlength=chains) > 0
     examined = np.bincount(ring_chain[suspicious], minlength=chains) > 0
@@ -158,31 +169,32 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     # circles._outward_sum: the seven-sample estimate, or the sum over every vertex
     cosine = field.frame[..., 0] @ normal_field.trig_basis(normal_field.SAMPLE_ANGLES).T
     sample_lengths = np.linalg.norm(field.sample_normals, axis=-1)
+    # the UVs' steps along each chain (uv.along_lengths) from the sample points
+    sample_steps = np.linalg.norm(np.diff(field.samples, axis=0), axis=-1).mean(axis=-1)
+    del field  # the normal field's coefficients and samples: nothing below reads them
     # a zero sample normal is on a stationary ring, whose chain went to the per-chain path above
     cosine = np.divide(cosine, sample_lengths, out=np.zeros_like(cosine), where=sample_lengths > 0.0)
-    estimate = np.bincount(ring_chain, weights=cosine.mean(axis=1) * rings.radius, minlength=chains)
-    radius_sum = np.bincount(ring_chain, weights=rings.radius, minlength=chains)
+    estimate = np.bincount(ring_chain, weights=cosine.mean(axis=1) * radius, minlength=chains)
+    radius_sum = np.bincount(ring_chain, weights=radius, minlength=chains)
     trusted = ~examined & (np.abs(estimate) >= OUTWARD_TRUST * radius_sum)
     # a sum within rounding of the trust threshold could go either way: the per-chain path decides
     fallback |= ~examined & (np.abs(np.abs(estimate) - OUTWARD_TRUST * radius_sum) <= 1e-9 * radius_sum)
-    outward = np.einsum("kmi,kmi->k", normals, positions - rings.centre[:, None, :])
+    outward = np.einsum("kmi,kmi->k", normals, positions - centre[:, None, :])
     full = np.bincount(ring_chain, weights=outward, minlength=chains)
     total = np.where(trusted, estimate, full)
     fallback |= np.abs(total) <= 1e-9 * radius_sum * (around + 1)  # a sign too close to call
     flip = total < 0.0
-    flipped_rings = flip[ring_chain]
-    normals[flipped_rings] *= -1.0
+    normals[flip[ring_chain]] *= -1.0
 
     positions[:, -1] = positions[:, 0]
     normals[:, -1] = normals[:, 0]
     columns = around + 1
 
     # UVs (uv.along_lengths, normalised, mean_along) per chain, row-wise reductions
-    sample_steps = np.linalg.norm(np.diff(field.samples, axis=0), axis=-1).mean(axis=-1)
     travelled = np.zeros(len(t))
     circumference = np.zeros(chains)
     length = np.zeros(chains)
-    ring_circ = 2.0 * np.pi * rings.radius
+    ring_circ = 2.0 * np.pi * radius
     for members, grid, valid in _padded_rows(ring_first, along):
         step_rows = np.where(valid[:, 1:], sample_steps[np.maximum(grid[:, 1:], 1) - 1], 0.0)
         cumulative = np.concatenate([np.zeros((len(members), 1)), np.cumsum(step_rows, axis=1)], axis=1)
@@ -199,38 +211,53 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
             circumference[members[same]] = np.sum(trapezoid, axis=1) / np.where(last[same] > 0.0, last[same], 1.0)
     fallback |= ~(length > 0.0)
     v_coordinate = travelled / np.where(length > 0.0, length, 1.0)[ring_chain]
-    uvs = np.empty((len(t), columns, 2))
+
+    # vertices of the kept chains, chain after chain (views of the whole grid when every chain is kept)
+    keep_ring = ~fallback[ring_chain]
+    kept_rings = np.flatnonzero(keep_ring)
+    if len(kept_rings) < len(t):
+        positions, normals, v_coordinate = positions[kept_rings], normals[kept_rings], v_coordinate[kept_rings]
+    uvs = np.empty((len(kept_rings), columns, 2))
     uvs[:, :, 0] = np.linspace(0.0, 1.0, columns)[None, :]
     uvs[:, :, 1] = v_coordinate[:, None]
 
     # faces: circles._wound_grid per chain, local indices; strips by a turning ring by geometry
-    keep_ring = ~fallback[ring_chain]
     pair = np.flatnonzero(keep_ring[:-1] & within)  # ring k and k + 1 of one kept chain
-    j = np.arange(columns - 1)
-    row = np.empty((columns - 1, 2, 3), dtype=np.int64)
+    swap = flip[ring_chain[pair]]
+    j = np.arange(columns - 1, dtype=np.int32)
+    row = np.empty((columns - 1, 2, 3), dtype=np.int32)
     row[:, 0, 0], row[:, 0, 1], row[:, 0, 2] = j, j + 1, j + columns
     row[:, 1, 0], row[:, 1, 1], row[:, 1, 2] = j + 1, j + columns + 1, j + columns
-    faces = (row.reshape(1, -1, 3) + (ring_local[pair] * columns)[:, None, None])  # (P, 2 (columns-1), 3)
-    swap = flip[ring_chain[pair]]
-    faces[swap] = faces[swap][:, :, [0, 2, 1]]
+    row = row.reshape(1, -1, 3)
+    faces = np.where(swap[:, None, None], row[:, :, [0, 2, 1]], row)  # (P, 2 (columns-1), 3)
+    faces += (ring_local[pair] * columns).astype(np.int32)[:, None, None]
     strip = np.flatnonzero(suspicious[pair] | suspicious[pair + 1])
     if strip.size:
-        against = _against_normals(positions, normals, pair[strip], swap[strip])  # (S, columns - 1, 2)
-        rows = faces[strip]
-        rows[against.reshape(len(strip), -1)] = rows[against.reshape(len(strip), -1)][:, [0, 2, 1]]
-        faces[strip] = rows
-    face_chain = np.repeat(ring_chain[pair], 2 * (columns - 1))
-    faces = faces.reshape(-1, 3)
-
-    # vertices of the kept chains, chain after chain
-    kept_rings = np.flatnonzero(keep_ring)
-    positions = positions[kept_rings].reshape(-1, 3)
-    normals = normals[kept_rings].reshape(-1, 3)
-    uvs = uvs[kept_rings].reshape(-1, 2)
-    vertex_chain = np.repeat(ring_chain[kept_rings], columns)
-    vertex_ring = np.repeat(ring_local[kept_rings], columns)
-    return TubeArrays(positions, normals, uvs, faces, face_chain, vertex_chain, vertex_ring,
+        # the strip's rings among the kept ones (pairs never span a dropped chain)
+        at = np.cumsum(keep_ring) - 1
+        _orient_by_geometry(faces, positions, normals, at[pair[strip]], strip, swap[strip])
+    face_counts = np.bincount(ring_chain[pair], minlength=chains) * (2 * (columns - 1))
+    return TubeArrays(positions.reshape(-1, 3), normals.reshape(-1, 3), uvs.reshape(-1, 2), faces.reshape(-1, 3),
+                      ring_chain[kept_rings], ring_local[kept_rings], face_counts,
                       np.stack([circumference, np.where(length > 0.0, length, circumference)], axis=1), fallback)
+
+
+# Strip pairs oriented by geometry per block: the corner gathers and products of a block stay
+# small (about 2 kB a pair at 8 around) however many rings of a chunk turn.
+STRIP_BLOCK = 256
+
+
+def _orient_by_geometry(faces: np.ndarray, positions: np.ndarray, normals: np.ndarray, pair: np.ndarray,
+                        rows: np.ndarray, swap: np.ndarray) -> None:
+    """Reverses, in place, the triangles of ``faces[rows]`` (rows of the pairs of rings ``pair``,
+    ``pair + 1`` of the (R, columns, 3) grids) whose geometric normal points against the sum of
+    their vertex normals (``_against_normals``), a block of pairs at a time."""
+    for start in range(0, len(rows), STRIP_BLOCK):
+        block = slice(start, start + STRIP_BLOCK)
+        against = _against_normals(positions, normals, pair[block], swap[block]).reshape(len(rows[block]), -1)
+        strip_faces = faces[rows[block]]
+        strip_faces[against] = strip_faces[against][:, [0, 2, 1]]
+        faces[rows[block]] = strip_faces
 
 
 def _against_normals(positions: np.ndarray, normals: np.ndarray, pair: np.ndarray, swap: np.ndarray) -> np.ndarray:
