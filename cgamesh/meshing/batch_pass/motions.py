@@ -175,9 +175,10 @@ def _bumps(centre_i, centre_j, start, end) -> np.ndarray:
     chord = centre_j - centre_i
     chord = chord - start * np.einsum("si,si->s", chord, start)[:, None]
     length = np.linalg.norm(chord, axis=1)
-    fallback = perpendicular_unit(start)
     usable = length > 1e-9 * np.maximum(1.0, np.linalg.norm(centre_j - centre_i, axis=1))
-    direction = np.where(usable[:, None], chord / np.where(usable, length, 1.0)[:, None], fallback)
+    direction = chord / np.where(usable, length, 1.0)[:, None]
+    if not usable.all():  # the fallback row by row, made only where it is taken
+        direction[~usable] = perpendicular_unit(start[~usable])
     return weight[:, None] * direction
 
 

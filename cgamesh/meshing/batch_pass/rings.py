@@ -228,9 +228,11 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
 
     # vertices of the kept chains, chain after chain
     kept_rings = np.flatnonzero(keep_ring)
-    positions = positions[kept_rings].reshape(-1, 3)
-    normals = normals[kept_rings].reshape(-1, 3)
-    uvs = uvs[kept_rings].reshape(-1, 2)
+    if len(kept_rings) < len(keep_ring):  # else every ring is kept: the grids as they are, no copies
+        positions, normals, uvs = positions[kept_rings], normals[kept_rings], uvs[kept_rings]
+    positions = positions.reshape(-1, 3)
+    normals = normals.reshape(-1, 3)
+    uvs = uvs.reshape(-1, 2)
     vertex_chain = np.repeat(ring_chain[kept_rings], columns)
     vertex_ring = np.repeat(ring_local[kept_rings], columns)
     return TubeArrays(positions, normals, uvs, faces, face_chain, vertex_chain, vertex_ring,
