@@ -77,8 +77,9 @@ def apply_to_e1(rotor: np.ndarray) -> np.ndarray:
 def transported_axes(normal: np.ndarray, ring_local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """In-plane unit axes u, v (K, 3) of rings with unit normals (K, 3), ring_local (K,) the
     ring's index within its chain (chains one after another)."""
-    first = ring_local == 0
-    previous = np.where(first[:, None], np.array([0.0, 0.0, 1.0]), np.roll(normal, 1, axis=0))
+    previous = np.empty_like(normal)  # the ring before each ring, e3 before a chain's first
+    previous[1:] = normal[:-1]
+    previous[ring_local == 0] = (0.0, 0.0, 1.0)
     accumulated = segmented_prefix(rotation_rows(previous, normal), ring_local)
     u = apply_to_e1(accumulated)
     u -= np.einsum("ki,ki->k", u, normal)[:, None] * normal
