@@ -164,15 +164,13 @@ def tubes(polylines: np.ndarray | Sequence[np.ndarray], radii: float | np.ndarra
         arrays["points"] = np.asarray(polylines, dtype=np.float64)
         pieces = None
     else:
-        pieces = [np.asarray(p, dtype=np.float64) for p in polylines]
-        if any(p.ndim != 2 or p.shape[1:] != (3,) for p in pieces):
-            raise InvalidInputError(f"{name}: expected polylines of shape (n, 3), got "
-                                    f"{[p.shape for p in pieces if p.ndim != 2 or p.shape[1:] != (3,)][0]}")
-        arrays["points"] = np.concatenate(pieces) if pieces else np.zeros((0, 3))
+        pieces = polylines
+        arrays["points"] = _concatenated(polylines, name)
     if parents is not None:
         arrays["parents"] = np.asarray(parents)
     else:
-        lengths = [len(p) for p in pieces] if pieces is not None else [len(arrays["points"])]
+        lengths = (np.fromiter(map(len, pieces), dtype=np.int64, count=len(pieces)) if pieces is not None
+                   else [len(arrays["points"])])
         arrays["offsets"] = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
     if radii is not None and np.ndim(radii) == 0 and not isinstance(radii, (list, tuple)):
         options.setdefault("radius", float(radii))
@@ -183,6 +181,25 @@ def tubes(polylines: np.ndarray | Sequence[np.ndarray], radii: float | np.ndarra
             raise InvalidInputError(f"{name}: a scalar cannot be named {key!r}")
         arrays[key] = _flat(values, pieces, name, key)
     return _mesh(centerlines_from_arrays(arrays, name, units), options)
+
+
+def _concatenated(polylines, name: str) -> np.ndarray:
+    """The (n_i, 3) polylines as one (N, 3) float64 array, joined in one call (no Python step
+    per polyline); only when that cannot give (N, 3) are they examined one by one, to name the
+    first of the wrong shape."""
+    if not len(polylines):
+        return np.zeros((0, 3))
+    try:
+        points = np.concatenate(polylines, axis=0, dtype=np.float64)
+    except (ValueError, TypeError):
+        points = None
+    if points is None or points.ndim != 2 or points.shape[1] != 3:
+        pieces = [np.asarray(p, dtype=np.float64) for p in polylines]
+        wrong = [p.shape for p in pieces if p.ndim != 2 or p.shape[1:] != (3,)]
+        if wrong:
+            raise InvalidInputError(f"{name}: expected polylines of shape (n, 3), got {wrong[0]}")
+        points = np.concatenate(pieces)
+    return points
 
 
 def _flat(values, pieces, name: str, key: str) -> np.ndarray:

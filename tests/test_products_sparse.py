@@ -76,3 +76,33 @@ def test_row_products_equal_the_multivector_products(grades):
     blades_out, rows = products.row_product("geometric", a.T[blades_a], b.T[blades_b], grades_a, grades_b, grades_out)
     np.testing.assert_array_equal(rows, expected.T[blades_out])
     assert not np.any(np.delete(expected, blades_out, axis=1))
+
+
+@pytest.mark.parametrize("kind, grades_a, grades_b, grades_out, carried_a, carried_b", [
+    ("outer", (3,), (1,), products.ALL_GRADES, None, (4, 5)),  # a circle with n_inf
+    ("geometric", (3,), (1,), (2, 4), None, (4, 5)),
+    ("geometric", (1,), (1,), ROTOR, (1, 2, 3), (1, 2, 3)),  # two Euclidean vectors
+    ("geometric", ROTOR, (1,), (1, 3), None, (1,)),  # a rotor applied to e1
+])
+def test_dropping_the_blades_an_operand_never_carries_keeps_the_bits(kind, grades_a, grades_b, grades_out,
+                                                                      carried_a, carried_b):
+    """Rows of blades that are zero contribute exact zeros, which a sum from zero of finite terms
+    does not change: naming only the carried blades (``Blades``) gives the same rows, bit for bit."""
+    rng = np.random.default_rng(5)
+    rows = 257
+    full_a, full_b, full_out, _ = products.product_terms(kind, grades_a, grades_b, grades_out)
+    left = rng.normal(size=(len(full_a), rows)) * np.exp(3.0 * rng.normal(size=(1, rows)))
+    right = rng.normal(size=(len(full_b), rows))
+    selections = []
+    for full, carried, values in ((full_a, carried_a, left), (full_b, carried_b, right)):
+        if carried is None:
+            selections.append((grades_a if values is left else grades_b, values))
+            continue
+        values[~np.isin(full, carried)] = 0.0  # the blades it does not carry
+        selections.append((products.Blades(carried), values[np.isin(full, carried)]))
+    (sel_a, rows_a), (sel_b, rows_b) = selections
+    blades, expected = products.row_product(kind, left, right, grades_a, grades_b, grades_out)
+    got_blades, got = products.row_product(kind, rows_a, rows_b, sel_a, sel_b, grades_out)
+    assert set(got_blades) <= set(blades) and len(got_blades) > 0
+    np.testing.assert_array_equal(got, expected[np.searchsorted(blades, got_blades)])
+    assert not np.any(np.delete(expected, np.searchsorted(blades, got_blades), axis=0))  # the rest is zero

@@ -207,16 +207,24 @@ def carried_velocity(omega: np.ndarray, local: np.ndarray) -> np.ndarray:
     half_square = 0.5 * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
     vector = [*x, half_square - 0.5, half_square + 0.5]  # e1..e5 of up(x) (conformal.up)
     bivector = omega[..., None]  # (10, K, 1) against the (K, S) coefficients
-    moved = []
-    for blade_terms in terms:
-        total = None
-        for j, b, positive in blade_terms:
-            term = vector[j] * bivector[b]
-            total = (term if positive else -term) if total is None else (total + term if positive else total - term)
-        moved.append(total)
+    # each blade's terms summed into its own buffer (first term negated in place, the rest
+    # added or subtracted through one scratch): the same operations as forming each term anew.
+    # Buffers laid out as the points are (``empty_like`` keeps their axis order), so that
+    # numpy's loops run along the same axis as they would for fresh results.
+    moved = [np.empty_like(half_square) for _ in terms]
+    scratch = np.empty_like(half_square)
+    for total, blade_terms in zip(moved, terms):
+        (j, b, positive), rest = blade_terms[0], blade_terms[1:]
+        np.multiply(vector[j], bivector[b], out=total)
+        if not positive:
+            np.negative(total, out=total)
+        for j, b, positive in rest:
+            np.multiply(vector[j], bivector[b], out=scratch)
+            (np.add if positive else np.subtract)(total, scratch, out=total)
     assert tuple(blades_out) == (E1, E2, E3, E4, E5)
-    rate = moved[4] - moved[3]  # -X' . n_inf (conformal.weight)
+    rate = np.subtract(moved[4], moved[3], out=moved[4])  # -X' . n_inf (conformal.weight)
     out = np.empty(local.shape)
     for axis in range(3):
-        np.subtract(moved[axis], rate * x[axis], out=out[..., axis])
+        np.multiply(rate, x[axis], out=scratch)
+        np.subtract(moved[axis], scratch, out=out[..., axis])
     return out

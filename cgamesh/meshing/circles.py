@@ -90,7 +90,8 @@ class RingNormals:
         points, radial = normal_field.sample_points(rings.centre, rings.radius, u, v)
         # In the surface's working units (world / frame scale): a tube 1e-300 or 1e300 across
         # has normals whose squared lengths neither underflow nor overflow.
-        velocity = rings.velocity(points) / rings.frame.scale
+        velocity = rings.velocity(points)  # a fresh array, divided in place
+        velocity /= rings.frame.scale
         zeta_rho = normal_field.frame_coordinates(velocity, radial, rings.normal)
         sampled = normal_field.normal_samples(zeta_rho, radial, rings.normal)
         speed = normal_field.row_lengths(velocity).max(axis=1)

@@ -87,6 +87,9 @@ def envelope_normals(p: np.ndarray, radii: np.ndarray, tangents: np.ndarray, fir
     index = np.arange(n)
     chain_first = np.repeat(first, count)
     chain_last = chain_first + np.repeat(count, count) - 1
+    inner = (index != chain_first) & (index != chain_last)
+    if not inner.any():  # chains of two nodes only: no node has two spans to turn between
+        return out
     chord = np.zeros_like(p)
     chord[:-1] = p[1:] - p[:-1]
     length = np.sqrt((chord * chord).sum(axis=1))
@@ -94,7 +97,6 @@ def envelope_normals(p: np.ndarray, radii: np.ndarray, tangents: np.ndarray, fir
     unit = chord / length[:, None]
     # slopes of the centre curve per unit length: the mean of the unit chords, one-sided at ends
     slope = np.empty_like(p)
-    inner = (index != chain_first) & (index != chain_last)
     slope[inner] = 0.5 * (unit[index[inner] - 1] + unit[inner])
     slope[chain_first] = unit[chain_first]
     slope[chain_last] = unit[chain_last - 1]

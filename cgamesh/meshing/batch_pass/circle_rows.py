@@ -24,6 +24,8 @@ from cgamesh.geometry.algebra.layout import BLADE_COUNT, grade_indices
 
 _VECTOR = grade_indices(1)
 _N_INF = N_INF[_VECTOR][:, None]  # n_inf's vector coefficients, a column against (5, K) rows
+_N_INF_BLADES = products.Blades(int(b) for b in np.flatnonzero(N_INF))  # e4, e5
+_N_INF_ROWS = N_INF[list(_N_INF_BLADES)][:, None]
 
 
 @lru_cache(maxsize=None)
@@ -94,10 +96,13 @@ class CircleRows:
     def euclidean(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``objects.circle_euclidean``: centre (K, 3), unit normal (K, 3), radius (K,)."""
         circles = self.blades
-        n_inf = N_INF[_VECTOR][:, None]
-        plane = products.row_product("outer", circles, n_inf, (3,), (1,), products.ALL_GRADES)[1]  # grade 4
-        blades_out, moved = products.row_product("geometric", circles, n_inf, (3,), (1,), (2, 4))
-        _, point = products.row_product("geometric", products.admitted_rows(blades_out, moved, (2, 4)), circles, (2, 4), (3,), (1,))
+        # n_inf carries e4 and e5 only: the terms of its zero coefficients, and those of the
+        # blades the product with it never makes, are exact zeros, which a sum from zero of
+        # finite terms does not feel: the same rows from fewer terms
+        plane = products.row_product("outer", circles, _N_INF_ROWS, (3,), _N_INF_BLADES, products.ALL_GRADES)[1]  # grade 4
+        blades_out, moved = products.row_product("geometric", circles, _N_INF_ROWS, (3,), _N_INF_BLADES, (2, 4))
+        _, point = products.row_product("geometric", moved, circles, products.Blades(int(b) for b in blades_out),
+                                        (3,), (1,))
         # (K, 3) arrays laid out as the per-chain readout's column gathers lay them out, (3, K) in
         # memory: numpy's einsum sums a row in an order that depends on the layout
         normal = (-_dual(plane, 4)[:3]).T

@@ -18,19 +18,20 @@ from cgamesh.geometry.algebra.layout import REVERSE_SIGN, grade_indices
 
 ROTOR = rotors.EUCLIDEAN_ROTOR_BLADES  # 1, e12, e13, e23
 _ROTOR_REVERSE = REVERSE_SIGN[list(ROTOR)][:, None]
-_VECTOR = grade_indices(1)
 
 
-def _vector_rows(x: np.ndarray) -> np.ndarray:
-    """Rows (5, K) of the vectors x (K, 3) (``conformal.vector``: e4, e5 zero)."""
-    rows = np.zeros((5, len(x)))
-    rows[:3] = x.T
-    return rows
+# Products skip the blades an operand never carries (e4 and e5 of a Euclidean vector, every
+# blade but e1 of e1): their terms are exact zeros, and a sum from zero of finite terms is the
+# same float with or without them, so the rows keep their bits with fewer terms.
+_EUCLIDEAN_VECTOR = products.Blades(int(b) for b in grade_indices(1)[:3])  # e1, e2, e3
+_E1 = products.Blades((int(grade_indices(1)[0]),))
+_E1_ROW = np.ones((1, 1))
 
 
 def rotation_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``rotors.rotation_between(a, b)`` for unit vectors a, b (K, 3), as rotor rows (4, K)."""
-    blades, rows = products.row_product("geometric", _vector_rows(b), _vector_rows(a), (1,), (1,), (0, 2))
+    blades, rows = products.row_product("geometric", np.ascontiguousarray(b.T), np.ascontiguousarray(a.T),
+                                        _EUCLIDEAN_VECTOR, _EUCLIDEAN_VECTOR, ROTOR)
     rotor = products.admitted_rows(blades, rows, ROTOR)
     rotor[0] += 1.0  # 1 + b a (every other blade as the multivector sum makes it: 0.0 + x)
     rotor[1:] += 0.0
@@ -65,11 +66,9 @@ def segmented_prefix(steps: np.ndarray, local: np.ndarray) -> np.ndarray:
 
 def apply_to_e1(rotor: np.ndarray) -> np.ndarray:
     """``rotors.apply_to_euclidean(rotor, e1)``: R e1 ~R (K, 3) of rotor rows (4, K)."""
-    e1 = np.zeros((5, 1))
-    e1[0] = 1.0
-    blades, rows = products.row_product("geometric", rotor, e1, ROTOR, (1,), (1, 3))
-    _, moved = products.row_product("geometric", products.admitted_rows(blades, rows, (1, 3)),
-                                    rotor * _ROTOR_REVERSE, (1, 3), ROTOR, (1,))
+    blades, rows = products.row_product("geometric", rotor, _E1_ROW, ROTOR, _E1, (1, 3))
+    _, moved = products.row_product("geometric", rows, rotor * _ROTOR_REVERSE,
+                                    products.Blades(int(b) for b in blades), ROTOR, (1,))
     # laid out as ``rotors.apply_to_euclidean``'s column gather lays it out, (3, K) in memory:
     # the caller's einsum sums a row in an order that depends on the layout
     return moved[:3].T
@@ -78,8 +77,9 @@ def apply_to_e1(rotor: np.ndarray) -> np.ndarray:
 def transported_axes(normal: np.ndarray, ring_local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """In-plane unit axes u, v (K, 3) of rings with unit normals (K, 3), ring_local (K,) the
     ring's index within its chain (chains one after another)."""
-    first = ring_local == 0
-    previous = np.where(first[:, None], np.array([0.0, 0.0, 1.0]), np.roll(normal, 1, axis=0))
+    previous = np.empty_like(normal)  # the ring before each ring, e3 before a chain's first
+    previous[1:] = normal[:-1]
+    previous[ring_local == 0] = (0.0, 0.0, 1.0)
     accumulated = segmented_prefix(rotation_rows(previous, normal), ring_local)
     u = apply_to_e1(accumulated)
     u -= np.einsum("ki,ki->k", u, normal)[:, None] * normal

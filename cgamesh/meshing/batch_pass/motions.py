@@ -11,6 +11,7 @@ code handles an open end. The one sequential step of the per-chain code, the sig
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -28,34 +29,36 @@ CERTIFY_FACTOR = 2.0
 @dataclass(frozen=True)
 class ChainNodes:
     """Nodes of many chains, concatenated: ``first`` (C,) index of each chain's first node,
-    ``count`` (C,) nodes per chain (>= 2); ``chain`` (N,) the chain of every node."""
+    ``count`` (C,) nodes per chain (>= 2); ``chain`` (N,) the chain of every node. The index
+    arrays derived from them are made once per instance (``cached_property``): the motion's
+    construction and evaluation read them several times."""
 
     first: np.ndarray
     count: np.ndarray
 
-    @property
+    @cached_property
     def chain(self) -> np.ndarray:
         return np.repeat(np.arange(len(self.count)), self.count)
 
-    @property
+    @cached_property
     def local(self) -> np.ndarray:
         """Each node's index within its chain (N,)."""
         return np.arange(int(self.count.sum())) - np.repeat(self.first, self.count)
 
-    @property
+    @cached_property
     def is_first(self) -> np.ndarray:
         return self.local == 0
 
-    @property
+    @cached_property
     def is_last(self) -> np.ndarray:
         return self.local == np.repeat(self.count - 1, self.count)
 
-    @property
+    @cached_property
     def span_start(self) -> np.ndarray:
         """Global node index of the first node of every span (S,), chain after chain."""
         return np.flatnonzero(~self.is_last)
 
-    @property
+    @cached_property
     def span_first(self) -> np.ndarray:
         """Index of each chain's first span in the span arrays (C,)."""
         return self.first - np.arange(len(self.count))
@@ -172,9 +175,10 @@ def _bumps(centre_i, centre_j, start, end) -> np.ndarray:
     chord = centre_j - centre_i
     chord = chord - start * np.einsum("si,si->s", chord, start)[:, None]
     length = np.linalg.norm(chord, axis=1)
-    fallback = perpendicular_unit(start)
     usable = length > 1e-9 * np.maximum(1.0, np.linalg.norm(centre_j - centre_i, axis=1))
-    direction = np.where(usable[:, None], chord / np.where(usable, length, 1.0)[:, None], fallback)
+    direction = chord / np.where(usable, length, 1.0)[:, None]
+    if not usable.all():  # the fallback row by row, made only where it is taken
+        direction[~usable] = perpendicular_unit(start[~usable])
     return weight[:, None] * direction
 
 

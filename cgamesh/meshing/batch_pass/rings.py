@@ -59,7 +59,11 @@ class _BladeRings:
         from cgamesh.geometry.surface import carried_velocity
 
         scale = self.scale[:, None, None]
-        return scale * carried_velocity(self.omega, (points - self.origin[:, None, :]) / scale)
+        local = np.subtract(points, self.origin[:, None, :])
+        local /= scale
+        velocity = carried_velocity(self.omega, local)
+        velocity *= scale  # in place: the same products as scale * velocity
+        return velocity
 
 
 @dataclass(frozen=True)
@@ -272,17 +276,28 @@ def _against_normals(positions: np.ndarray, normals: np.ndarray, pair: np.ndarra
     """
     here, there = positions[pair], positions[pair + 1]
     n_here, n_there = normals[pair], normals[pair + 1]
+    # the edge from ring k to ring k + 1 at column j is triangle 0's (third - first) at j and
+    # triangle 1's (second - first) at j - 1: one difference serves both
+    across = there - here
     # (first, second, third) corner of triangle 0 (j, j + 1, j + columns) and 1 (j + 1, j + columns + 1,
-    # j + columns) of each quad
-    corners = [((here[:, :-1], n_here[:, :-1]), (here[:, 1:], n_here[:, 1:]), (there[:, :-1], n_there[:, :-1])),
-               ((here[:, 1:], n_here[:, 1:]), (there[:, 1:], n_there[:, 1:]), (there[:, :-1], n_there[:, :-1]))]
+    # j + columns) of each quad: (second - first, third - first), and the normals at the three corners
+    corners = [((here[:, 1:] - here[:, :-1], across[:, :-1]), (n_here[:, :-1], n_here[:, 1:], n_there[:, :-1])),
+               ((across[:, 1:], there[:, :-1] - here[:, 1:]), (n_here[:, 1:], n_there[:, 1:], n_there[:, :-1]))]
     out = np.empty((len(pair), positions.shape[1] - 1, 2), dtype=bool)
     swapped = swap[:, None, None]
-    for kind, (a, b, c) in enumerate(corners):
-        geometric = _cross(b[0] - a[0], c[0] - a[0]).reshape(-1, 3)
-        summed = ((a[1] + np.where(swapped, c[1], b[1])) + np.where(swapped, b[1], c[1])).reshape(-1, 3)
-        dot = np.einsum("ti,ti->t", geometric, summed).reshape(len(pair), -1)
-        out[:, :, kind] = np.where(swap[:, None], dot > 0.0, dot < 0.0)
+    for kind, ((ab, ac), (a, b, c)) in enumerate(corners):
+        geometric = _cross(ab, ac).reshape(-1, 3)
+        if not swap.any():  # one winding for every triangle (the usual case): no selection
+            summed = (a + b) + c
+        elif swap.all():
+            summed = (a + c) + b
+        else:
+            summed = (a + np.where(swapped, c, b)) + np.where(swapped, b, c)
+        dot = np.einsum("ti,ti->t", geometric, summed.reshape(-1, 3)).reshape(len(pair), -1)
+        if not swap.any():
+            np.less(dot, 0.0, out=out[:, :, kind])
+        else:
+            out[:, :, kind] = np.where(swap[:, None], dot > 0.0, dot < 0.0)
     return out
 
 
