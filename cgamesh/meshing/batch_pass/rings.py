@@ -21,7 +21,7 @@ from cgamesh.meshing import normals as normal_field
 from cgamesh.meshing.batch_pass.circle_rows import CircleRows
 from cgamesh.meshing.batch_pass.frames import transported_axes
 from cgamesh.meshing.batch_pass.motions import ChainMotions
-from cgamesh.meshing.circles import (FOLD_AGREEMENT, NEAR_ZERO_FRACTION, OUTWARD_TRUST, STATIONARY_FRACTION,
+from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, FOLD_AGREEMENT, NEAR_ZERO_FRACTION, OUTWARD_TRUST, STATIONARY_FRACTION,
                                      RingNormals, fold_screen, frame_values)
 
 
@@ -100,6 +100,18 @@ def _linspace_parameters(spans: np.ndarray, along: np.ndarray) -> tuple[np.ndarr
     return t, chain
 
 
+def _coincident_rings(rings: _BladeRings, ring_chain: np.ndarray, chains: int) -> np.ndarray:
+    """(C,) chains of which ``circles.distinct_rings`` would leave a ring out, or find none to
+    mesh (consecutive rings within DISTINCT_RING_FRACTION of the chain's size, as after a step
+    of 1e-7 of the radius): the per-chain path drops those rings or reports the chain. Its
+    step, elementwise on the same circles, so the same decision."""
+    centre, radius = rings.centre / rings.scale[:, None], rings.radius / rings.scale
+    step = (np.linalg.norm(centre[1:] - centre[:-1], axis=1) + np.abs(radius[1:] - radius[:-1])
+            + np.maximum(radius[1:], radius[:-1]) * np.linalg.norm(rings.normal[1:] - rings.normal[:-1], axis=1))
+    close = (ring_chain[1:] == ring_chain[:-1]) & ~(step > DISTINCT_RING_FRACTION)
+    return np.bincount(ring_chain[1:][close], minlength=chains) > 0
+
+
 def _padded_rows(first: np.ndarray, count: np.ndarray):
     """Per-chain rows for row-wise numpy reductions, grouped by length class so
     padding stays under 2x: yields (chains, local index grid (c, L) or -1, rows (c, L))."""
@@ -137,6 +149,7 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     del state, segment
 
     u, v = transported_axes(rings.normal, ring_local)  # circles.transported_frames, open chains
+    fallback |= _coincident_rings(rings, ring_chain, chains)
 
     field = RingNormals.of(rings, u, v)
     centre, radius = rings.centre, rings.radius
