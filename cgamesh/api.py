@@ -172,7 +172,7 @@ def tubes(polylines: np.ndarray | Sequence[np.ndarray], radii: float | np.ndarra
         lengths = (np.fromiter(map(len, pieces), dtype=np.int64, count=len(pieces)) if pieces is not None
                    else [len(arrays["points"])])
         arrays["offsets"] = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
-    if radii is not None and np.ndim(radii) == 0 and not isinstance(radii, (list, tuple)):
+    if radii is not None and not isinstance(radii, (list, tuple)) and np.ndim(radii) == 0:
         options.setdefault("radius", float(radii))
     elif radii is not None:
         arrays["radii"] = _flat(radii, pieces, name, "radii")
@@ -206,7 +206,13 @@ def _flat(values, pieces, name: str, key: str) -> np.ndarray:
     if pieces is not None and isinstance(values, (list, tuple)) and len(values) == len(pieces) \
             and all(np.ndim(v) == 1 for v in values):
         return np.concatenate([np.asarray(v, dtype=np.float64) for v in values]) if values else np.zeros(0)
-    return np.asarray(values, dtype=np.float64).reshape(-1)
+    try:
+        return np.asarray(values, dtype=np.float64).reshape(-1)
+    except (ValueError, TypeError):  # ragged, or not numbers
+        count = "" if pieces is None else f" or {len(pieces)} arrays, one per polyline"
+        raise InvalidInputError(f"{name}: expected {key} as numbers, one per point{count}; got "
+                                f"{type(values).__name__} of {len(values) if hasattr(values, '__len__') else 1} "
+                                "items that do not form one array") from None
 
 
 def _mesh(lines, options: dict) -> Meshes:

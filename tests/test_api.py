@@ -85,6 +85,13 @@ def test_unknown_options_and_bad_arrays_are_one_line_errors():
         cgamesh.tubes(points, radii=np.zeros(6), parents=parents)
     with pytest.raises(InvalidInputError, match="color-by must be one of"):
         cgamesh.tubes(points, radii=radii, parents=parents, color_by="fa")
+    a, b = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0.0]]), np.array([[0, 1, 0], [1, 1, 0.0]])
+    with pytest.raises(InvalidInputError, match="radii as numbers, one per point or 2 arrays"):
+        cgamesh.tubes([a, b], radii=[np.ones(3), np.ones(2), np.ones(1)])  # ragged, one array too many
+    with pytest.raises(InvalidInputError, match=r"radii: expected shape \(5,\), got \(8,\)"):
+        cgamesh.tubes([a, b], radii=[np.ones(3), np.ones(5)])
+    with pytest.raises(InvalidInputError, match="scalars|depth as numbers"):
+        cgamesh.tubes([a, b], radii=1.0, scalars={"depth": ["x", "y"]})
 
 
 def test_npz_files_through_the_command_line(tmp_path, capsys):
