@@ -109,7 +109,7 @@ class _Cells:
 def _read(surface: EvolvedSurface, t: np.ndarray) -> np.ndarray:
     """The projected blades at parameters t, read in chunks of SAMPLE_CHUNK."""
     parts = np.array_split(t, max(1, math.ceil(len(t) / SAMPLE_CHUNK)))
-    return np.concatenate([surface.sample(part).blades for part in parts])
+    return np.concatenate([surface.sample_blades(part) for part in parts])
 
 
 def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
@@ -125,7 +125,7 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
     path = cell_derivatives(grid(centre))
     cosine = cell_derivatives(grid(radius[:, None] * u))
     sine = cell_derivatives(grid(radius[:, None] * v))
-    r0, _, _ = cell_bounds(grid(radius[:, None]))
+    r0, r1, _ = cell_bounds(grid(radius[:, None]))
     _, n1, n2 = cell_bounds(grid(normal))
     norm = lambda x: np.sqrt(np.sum(x * x, axis=-1))  # noqa: E731
     # max over theta of |G| = |a + B cos theta + C sin theta|: on ANGLES angles, plus the most
@@ -152,7 +152,6 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
     turning = (np.sqrt(0.5 * (bb + cc) + np.sqrt(0.25 * (bb - cc) ** 2 + bc * bc))
                + np.hypot(norm(cosine.second_radius), norm(sine.second_radius)))
     axial, across = _axial_speed(grid(normal), path, n1)
-    _, r1, _ = cell_bounds(grid(radius[:, None]))
     sampled = grid(radius)
     least = np.maximum(np.minimum(sampled[:, :-1], sampled[:, 1:]) - 0.5 * r1 / cells, 0.0)  # <= r in the cell
     terms = dict(A=scale * along, B=scale * twist, Rm=scale * r0, N1=n1, N2=n2, Ar=scale * turning,
