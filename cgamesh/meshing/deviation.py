@@ -55,13 +55,13 @@ def segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nda
 
 def circle_read_out(surface: EvolvedSurface, t: np.ndarray):
     """World centre (A, 3), unit normal (A, 3) and radius (A,) of the circles C(t)."""
-    centre, normal, radius = circle_euclidean(surface.sample(t).blades)
+    centre, normal, radius = circle_euclidean(surface.sample_blades(t))
     return surface.frame.to_world(centre), normal, surface.frame.scale * radius
 
 
 def segment_read_out(surface: EvolvedSurface, t: np.ndarray):
     """World end points a, b (A, 3) of the point pairs P(t) (paper eq. 5)."""
-    a, b = point_pair_endpoints(surface.sample(t).blades)
+    a, b = point_pair_endpoints(surface.sample_blades(t))
     return surface.frame.to_world(a), surface.frame.to_world(b)
 
 

@@ -447,6 +447,27 @@ def _widened(cells: _Cells, table: _RangeMax, names, t: np.ndarray) -> dict:
     return wide
 
 
+class _IntervalErrors:
+    """``_interval_errors`` of one placement (its family, term table and count around), remembered
+    for the last few ring sets: placing asks it of the same rings up to three times in a row (the
+    last round of raising, the first of splitting, the test for relaxing). The arrays returned
+    are shared: read only."""
+
+    KEEP = 4
+
+    def __init__(self, family: _Surface, table: _RangeMax, names, around: int):
+        self.family, self.table, self.names, self.around = family, table, names, around
+        self._known: dict = {}
+
+    def __call__(self, cells: _Cells, t: np.ndarray):
+        key = (t.tobytes(), cells.cells, cells.closed_rate)
+        if key not in self._known:
+            if len(self._known) >= self.KEEP:
+                self._known.pop(next(iter(self._known)))
+            self._known[key] = _interval_errors(self.family, cells, self.table, self.names, t, self.around)
+        return self._known[key]
+
+
 def _plan(family: _Surface, tolerance: float) -> tuple[_Cells, int, np.ndarray, np.ndarray]:
     """The sampled cells, the count around and the per-cell density and counts for ``tolerance``."""
     if not (math.isfinite(tolerance) and tolerance > 0.0):
@@ -506,10 +527,11 @@ def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarr
     """Rings equidistributing ``density``, raised where an interval's bound misses (see the module doc)."""
     surface, kind, closed = family.surface, family.kind, family.closed
     names = sorted(cells.terms)
-    table = _RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1))
-    t, density = _raised(family, cells, table, names, around, density, counts, tolerance)
-    t, bound = _split_missed(family, cells, table, names, t, around, tolerance)
-    error, first, last, _ = _interval_errors(family, cells, table, names, t, around)
+    errors = _IntervalErrors(family, _RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1)),
+                             names, around)
+    t, density = _raised(errors, cells, density, counts, tolerance)
+    t, bound = _split_missed(errors, cells, t, tolerance)
+    error, first, last, _ = errors(cells, t)
     if np.mean(error) < RELAX_BELOW * tolerance:
         # The leading-term spacing was pessimistic here (most intervals' bound is well below the
         # tolerance): lower the density over each cell as its intervals' bounds allow (E grows
@@ -519,9 +541,8 @@ def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarr
         touched = np.repeat(first - np.cumsum(lengths) + lengths, lengths) + np.arange(lengths.sum())
         np.maximum.at(factor, touched, np.repeat(np.sqrt(np.clip(error / tolerance, 1.0 / 16.0, 1.0)), lengths))
         lowered = density * np.where(factor > 0.0, factor, 1.0).reshape(density.shape)
-        relaxed, _ = _raised(family, cells, table, names, around, lowered, _ring_counts(lowered, cells.cells),
-                             tolerance)
-        relaxed, relaxed_bound = _split_missed(family, cells, table, names, relaxed, around, tolerance)
+        relaxed, _ = _raised(errors, cells, lowered, _ring_counts(lowered, cells.cells), tolerance)
+        relaxed, relaxed_bound = _split_missed(errors, cells, relaxed, tolerance)
         if len(relaxed) < len(t):
             t, bound = relaxed, relaxed_bound
     if kind == "circles" and closed:
@@ -533,19 +554,19 @@ def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarr
             if rate <= cells.closed_rate:
                 break
             cells = replace(cells, closed_rate=rate * HOLONOMY_MARGIN)
-            t, bound = _split_missed(family, cells, table, names, t, around, tolerance)
+            t, bound = _split_missed(errors, cells, t, tolerance)
         else:
             raise InvalidInputError(f"surface '{surface.name}': the closed loop's frame holonomy does not settle")
     return TolerancePlan(around, t, bound)
 
 
-def _raised(family, cells, table, names, around, density, counts, tolerance):
+def _raised(errors, cells, density, counts, tolerance):
     """(rings equidistributing ``density``, the density): raised over the cells of the intervals
     whose bound misses, as their error needs, and placed again (at most DENSITY_ROUNDS times)."""
     t = None
     for _ in range(DENSITY_ROUNDS):
         t = _place(density, counts, cells.cells)
-        error, first, last, _ = _interval_errors(family, cells, table, names, t, around)
+        error, first, last, _ = errors(cells, t)
         missed = error > tolerance
         if not np.any(missed):
             break
@@ -561,10 +582,11 @@ def _raised(family, cells, table, names, around, density, counts, tolerance):
     return t, density
 
 
-def _split_missed(family, cells, table, names, t, around, tolerance):
+def _split_missed(errors, cells, t, tolerance):
     """Split each interval whose bound misses into as many equal parts as its maxima need."""
+    family, around = errors.family, errors.around
     for _ in range(64):
-        error, _, _, terms = _interval_errors(family, cells, table, names, t, around)
+        error, _, _, terms = errors(cells, t)
         missed = np.flatnonzero(error > tolerance)
         if missed.size == 0:
             return t, float(error.max())
