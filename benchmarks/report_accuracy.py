@@ -200,12 +200,13 @@ def write_comparison(path: Path, against: str) -> None:
     text = path.read_text()
     start = text.index(COMPARISON_HEADING)
     table_start = text.index("| surface | tolerance |", start)
-    table_end = text.index("\n## ", table_start)
+    # The table ends with its summary line; the notes after it stay.
+    table_end = text.index("\n", text.index("\nVertices ratio:", table_start) + 1)
     note = ("(This table: `python benchmarks/report_accuracy.py --compare-only --out docs`, every example; "
             "the sections below come from the last full run.)\n\n")
     if "--compare-only" in text[start:table_start]:
         note = ""
-    path.write_text(text[:table_start] + note + against + "\n" + text[table_end:])
+    path.write_text(text[:table_start] + note + against + text[table_end:])
 
 
 def root_finders(small: bool) -> tuple[str, dict]:
