@@ -12,7 +12,7 @@ from cgamesh.geometry.curves.linear import Linear
 from cgamesh.errors import DegenerateGeometryError
 from cgamesh.geometry.frame import LocalFrame
 from cgamesh.pipeline import build_surface
-from cgamesh.geometry.projection import margin, project, project_scalar
+from cgamesh.geometry.projection import margin, project, project_scalar, project_without_derivatives
 from cgamesh.inputs.scene import parse_scene
 from cgamesh.geometry.surface import EvolvedSurface
 
@@ -190,6 +190,29 @@ def test_margin_alone_equals_the_projections_margin(kind):
     if kind == "pairs":
         assert np.array_equal(margin(interpolant, surface.grade, size, scalar=True),
                               project_scalar(interpolant, derivative, surface.grade, size).margin)
+
+
+@pytest.mark.parametrize("grade", [3, 2], ids=["circles", "point_pairs"])
+@pytest.mark.parametrize("name", IDS)
+def test_blades_without_derivatives_are_the_projections_bit_for_bit(name, grade):
+    """The tolerance plan reads blades alone: they must be the very bits ``sample`` gives (the plan's
+    rings, and so the meshes, must not depend on which reader ran), and the margin too."""
+    surface = _surface(name, grade)
+    t = np.linspace(0.0, surface.segment_count, 301)
+    assert np.array_equal(surface.sample_blades(t), surface.sample(t).blades)
+    basis = surface.curve.basis(t)
+    interpolant, derivative = basis.evaluate(surface.controls)
+    size = basis.weight_sum()
+    for scalar, projector in ((False, project), (True, project_scalar)):
+        blades, margins = project_without_derivatives(interpolant, grade, size, scalar)
+        full = projector(interpolant, derivative, grade, size)
+        assert np.array_equal(blades, full.blades, equal_nan=True) and np.array_equal(margins, full.margin)
+
+
+def test_blades_without_derivatives_refuse_where_sample_refuses():
+    surface = build_surface(parse_scene(OPPOSITE, "opposite.yaml").surfaces[0])
+    with pytest.raises(DegenerateGeometryError, match="alpha = 0.5"):
+        surface.sample_blades(np.array([0.25, 0.5]))
 
 
 def test_the_scan_is_skipped_only_where_rings_are_as_dense_as_it():

@@ -207,3 +207,23 @@ def _grid_size(mesh, spec) -> int:
         columns = int(np.argmax(np.diff(mesh.uvs[:, 0]) < 0.0)) + 1
         return mesh.vertex_count - 2 * columns
     return mesh.vertex_count
+
+
+@pytest.mark.parametrize("stem", ["kb_tube", "closed_loop", "motor_tube"])
+def test_a_tolerance_mesh_is_the_mesher_s_mesh_on_the_plan_s_rings(stem):
+    """The tolerance run reads its rings once and hands them to the mesher: the mesh must be, bit
+    for bit, the one the mesher makes reading them itself (caps and closed loops included)."""
+    from cgamesh.meshing.circles import read_rings
+
+    spec = load_scene(Path(__file__).resolve().parent.parent / "examples" / f"{stem}.yaml").surfaces[0]
+    surface = build_surface(spec)
+    tolerance = 1e-3 * surface.frame.scale
+    plan = plan_tolerance(surface, tolerance, "circles", spec.closed)
+    run = mesh_surface(spec, Resolution(tolerance=tolerance))
+    read_here = mesh_circle_surface(surface, plan.around, t=plan.t, caps=spec.caps, closed=spec.closed)
+    handed = mesh_circle_surface(surface, plan.around, t=plan.t, caps=spec.caps, closed=spec.closed,
+                                 rings=read_rings(surface, plan.t))
+    for mesh in (run, handed):
+        for name in ("positions", "normals", "uvs", "faces"):
+            assert np.array_equal(getattr(mesh, name), getattr(read_here, name)), (stem, name)
+    assert run.max_deviation == plan.bound <= tolerance

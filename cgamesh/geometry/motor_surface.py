@@ -104,6 +104,10 @@ class MotorSurface:
         """Circles C(t) (A, 32) and dC/dt, local frame; ``margin`` holds |H| of the normal spline."""
         return MotorSample(self.path.evaluate(np.atleast_1d(np.asarray(t, dtype=np.float64))))
 
+    def sample_blades(self, t: np.ndarray) -> np.ndarray:
+        """The circles (A, 32) of ``sample(t)`` (as a blade surface's ``sample_blades``)."""
+        return self.sample(t).blades
+
     def check_projection_exists(self, sampled: np.ndarray | None = None) -> None:
         """Raise where the normal spline nearly vanishes (the only way a motor curve loses its circle)."""
         self.path.check_normals(self.name, SCAN_SAMPLES_PER_SEGMENT)

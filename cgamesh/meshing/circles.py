@@ -323,29 +323,41 @@ def drop_zero_area(positions: np.ndarray, faces: np.ndarray, suspects: np.ndarra
     return np.delete(faces, candidates[degenerate], axis=0)
 
 
+def read_rings(surface: EvolvedSurface, t: np.ndarray) -> CircleRings:
+    """The circles at parameters t, read out once for the mesher (a line's centre is at infinity:
+    ``mesh_circle_surface`` refuses it)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return CircleRings.from_projection(surface.sample(t), surface.frame)
+
+
+def kept_rings(rings: CircleRings, keep: np.ndarray) -> CircleRings:
+    """The rings ``keep`` (bool (K,)) of ``rings``."""
+    return CircleRings(rings.centre[keep], rings.normal[keep], rings.radius[keep], rings.omega[keep], rings.frame)
+
+
 def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None = None, caps: bool = False,
                         closed: bool = False, t: np.ndarray | None = None,
-                        with_tangents: bool = False, distinct: bool = False) -> SurfaceMesh:
+                        with_tangents: bool = False, distinct: bool = False,
+                        rings: CircleRings | None = None) -> SurfaceMesh:
     """Triangulate an evolved circle surface on rings of ``around`` vertices.
 
     The rings sit at the increasing parameters ``t`` (from 0 to the segment count), or at
     ``along`` evenly spaced ones. Each ring carries around + 1 vertices (the UV seam column
     repeats the first one). ``with_tangents``: also the analytic tangents (for normal maps).
     ``distinct``: leave out rings that would coincide with the ring before in an output file
-    (``distinct_rings``), as every mesh that is written should.
+    (``distinct_rings``), as every mesh that is written should. ``rings``: the circles at ``t``
+    already read out (``read_rings``), not read again.
     """
     if t is None:
         t = np.linspace(0.0, surface.segment_count, along)
     surface.check_projection_exists(sampled=t)
-    with np.errstate(divide="ignore", invalid="ignore"):  # a line's centre is at infinity: refused below
-        rings = CircleRings.from_projection(surface.sample(t), surface.frame)
+    if rings is None:
+        rings = read_rings(surface, t)
     _refuse_lines(rings, t, surface.segment_count)
     keep = distinct_rings(rings.centre, rings.normal, rings.radius, surface.frame.scale, surface.name) \
         if distinct else np.ones(len(t), dtype=bool)
     if not keep.all():
-        t = t[keep]
-        rings = CircleRings(rings.centre[keep], rings.normal[keep], rings.radius[keep], rings.omega[keep],
-                            rings.frame)
+        t, rings = t[keep], kept_rings(rings, keep)
     along = len(t)
     u, v = transported_frames(rings.normal, closed, t)
     field = _ring_normals(surface, t, rings, u, v)

@@ -16,14 +16,23 @@ import numpy as np
 from cgamesh.geometry.objects import perpendicular_unit
 
 
-def _multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Hamilton products p q of quaternions (..., 4) as (w, x, y, z)."""
-    pw, px, py, pz = np.moveaxis(p, -1, 0)
-    qw, qx, qy, qz = np.moveaxis(q, -1, 0)
-    return np.stack([pw * qw - px * qx - py * qy - pz * qz,
-                     pw * qx + px * qw + py * qz - pz * qy,
-                     pw * qy - px * qz + py * qw + pz * qx,
-                     pw * qz + px * qy - py * qx + pz * qw], axis=-1)
+def _prefix_products(steps: np.ndarray) -> np.ndarray:
+    """Running Hamilton products (K, 4) q_k ... q_1 q_0 of quaternions steps (K, 4) as (w, x, y, z),
+    by a log-depth scan (each pass multiplies every entry by the one ``shift`` before it), on the
+    four components as separate contiguous rows: no stacking or concatenating per pass."""
+    w, x, y, z = (np.ascontiguousarray(component) for component in steps.T)
+    shift = 1
+    while shift < len(w):
+        pw, px, py, pz = w[shift:], x[shift:], y[shift:], z[shift:]
+        qw, qx, qy, qz = w[:-shift], x[:-shift], y[:-shift], z[:-shift]
+        product = (pw * qw - px * qx - py * qy - pz * qz,
+                   pw * qx + px * qw + py * qz - pz * qy,
+                   pw * qy - px * qz + py * qw + pz * qx,
+                   pw * qz + px * qy - py * qx + pz * qw)
+        for row, value in zip((w, x, y, z), product):
+            row[shift:] = value
+        shift *= 2
+    return np.stack([w, x, y, z], axis=-1)
 
 
 def _between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -42,11 +51,7 @@ def transported_axes(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """In-plane unit axes u, v (K, 3) of unit normals (K, 3), e1 carried from e3 to the first
     normal and then from sample to sample by the smallest rotations (a log-depth scan)."""
     steps = np.concatenate([_between(np.array([[0.0, 0.0, 1.0]]), normal[:1]), _between(normal[:-1], normal[1:])])
-    acc = steps
-    shift = 1
-    while shift < len(acc):
-        acc = np.concatenate([acc[:shift], _multiply(acc[shift:], acc[:-shift])])
-        shift *= 2
+    acc = _prefix_products(steps)
     acc /= np.linalg.norm(acc, axis=-1, keepdims=True)
     w, axis = acc[:, :1], acc[:, 1:]
     e1 = np.broadcast_to(np.array([1.0, 0.0, 0.0]), axis.shape)

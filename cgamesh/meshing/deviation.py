@@ -24,6 +24,8 @@ from cgamesh.geometry.surface import EvolvedSurface
 FINE_MEMBERS = 17
 # Samples get the exact refinement in batches of this many, the largest first.
 REFINE_BATCH = 4096
+# Sample-to-member distances computed at once (a block of ring intervals).
+DISTANCES_PER_BLOCK = 1 << 18
 
 
 @dataclass(frozen=True)
@@ -55,13 +57,13 @@ def segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nda
 
 def circle_read_out(surface: EvolvedSurface, t: np.ndarray):
     """World centre (A, 3), unit normal (A, 3) and radius (A,) of the circles C(t)."""
-    centre, normal, radius = circle_euclidean(surface.sample(t).blades)
+    centre, normal, radius = circle_euclidean(surface.sample_blades(t))
     return surface.frame.to_world(centre), normal, surface.frame.scale * radius
 
 
 def segment_read_out(surface: EvolvedSurface, t: np.ndarray):
     """World end points a, b (A, 3) of the point pairs P(t) (paper eq. 5)."""
-    a, b = point_pair_endpoints(surface.sample(t).blades)
+    a, b = point_pair_endpoints(surface.sample_blades(t))
     return surface.frame.to_world(a), surface.frame.to_world(b)
 
 
@@ -101,10 +103,23 @@ def grid_deviation(surface: EvolvedSurface, t: np.ndarray, grid: np.ndarray, fam
     fraction = np.linspace(0.0, 1.0, FINE_MEMBERS)
     fine_t = t[:-1, None] + fraction[None, :] * np.diff(t)[:, None]  # (K-1, F)
     members = [m.reshape(fine_t.shape + m.shape[1:]) for m in family.read_out(surface, fine_t.ravel())]
-    distance = family.distance(samples[:, :, None, :], *(m[:, None] for m in members))  # (K-1, Q, F)
-    nearest = np.argmin(distance, axis=2).ravel()
-    flat = distance.reshape(-1, FINE_MEMBERS)
-    best = flat[np.arange(len(flat)), nearest]
+    intervals, per_interval = samples.shape[:2]
+    # Distances to the fine members, a block of intervals at a time (kept in cache, not a
+    # (K-1, Q, F) array of hundreds of MB); kept per sample: the nearest member, its distance
+    # and the distances on either side of it (for the parabola below).
+    nearest = np.empty(intervals * per_interval, dtype=np.intp)
+    best = np.empty(intervals * per_interval)
+    beside = np.empty((intervals * per_interval, 3))
+    block = max(1, DISTANCES_PER_BLOCK // (per_interval * FINE_MEMBERS))
+    for first in range(0, intervals, block):
+        part = slice(first, first + block)
+        distance = family.distance(samples[part, :, None, :], *(m[part, None] for m in members))  # (B, Q, F)
+        flat = distance.reshape(-1, FINE_MEMBERS)
+        rows = slice(first * per_interval, first * per_interval + len(flat))
+        nearest[rows] = np.argmin(flat, axis=1)
+        best[rows] = flat[np.arange(len(flat)), nearest[rows]]
+        inner = np.clip(nearest[rows], 1, FINE_MEMBERS - 2)
+        beside[rows] = np.take_along_axis(flat, np.stack([inner - 1, inner, inner + 1], axis=-1), axis=1)
 
     # A parabola through the squared distances around the nearest fine member points at a
     # better t; the exact member there can only lower the (still exact) bound. Only samples
@@ -118,7 +133,7 @@ def grid_deviation(surface: EvolvedSurface, t: np.ndarray, grid: np.ndarray, fam
         batch = open_[np.argsort(best[open_])[-REFINE_BATCH:]]
         interval = batch // per_interval
         inner = np.clip(nearest[batch], 1, FINE_MEMBERS - 2)
-        d2 = np.take_along_axis(flat[batch], np.stack([inner - 1, inner, inner + 1], axis=-1), axis=1) ** 2
+        d2 = beside[batch] ** 2
         curvature = d2[:, 0] - 2.0 * d2[:, 1] + d2[:, 2]
         with np.errstate(divide="ignore", invalid="ignore"):
             shift = np.where(curvature > 0.0, 0.5 * (d2[:, 0] - d2[:, 2]) / curvature, 0.0)

@@ -14,8 +14,8 @@ from __future__ import annotations
 from dataclasses import replace
 
 from cgamesh.geometry.surface import EvolvedSurface
-from cgamesh.meshing.circles import DISTINCT_RING_FRACTION, distinct_rings, mesh_circle_surface
-from cgamesh.meshing.deviation import circle_read_out
+from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, distinct_rings, kept_rings, mesh_circle_surface,
+                                     read_rings)
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.ribbons import mesh_ribbon_surface
 from cgamesh.meshing.tolerance_plan import PreparedPlan, TolerancePlan
@@ -40,15 +40,17 @@ def mesh_to_tolerance(surface: EvolvedSurface, tolerance: float, caps: bool = Fa
     this surface and tolerance (by the resource budget, which checked its projection).
     """
     plan = _plan(surface, tolerance, "circles", closed, prepared)
-    rings, bound = plan.t, plan.bound
-    distinct = distinct_rings(*circle_read_out(surface, rings), surface.frame.scale, surface.name)
+    t, bound = plan.t, plan.bound
+    rings = read_rings(surface, t)  # read once: for the distinct check and for the mesher
+    distinct = distinct_rings(rings.centre, rings.normal, rings.radius, surface.frame.scale, surface.name)
     if not distinct.all():
         # Rings that would coincide in float32 (nearly identical controls) are left out of the
         # mesh written. Each lay within 2 DISTINCT_RING_FRACTION of the surface's size of a ring
         # kept before it, so the mesh moved by at most that: the bound grows by it.
-        rings = rings[distinct]
+        t, rings = t[distinct], kept_rings(rings, distinct)
         bound += 2.0 * DISTINCT_RING_FRACTION * surface.frame.scale
-    mesh = mesh_circle_surface(surface, plan.around, t=rings, caps=caps, closed=closed, with_tangents=tangents)
+    mesh = mesh_circle_surface(surface, plan.around, t=t, caps=caps, closed=closed, with_tangents=tangents,
+                               rings=rings)
     return replace(mesh, max_deviation=bound)
 
 

@@ -112,7 +112,7 @@ class _Cells:
 def _read(surface: EvolvedSurface, t: np.ndarray) -> np.ndarray:
     """The projected blades at parameters t, read in chunks of SAMPLE_CHUNK."""
     parts = np.array_split(t, max(1, math.ceil(len(t) / SAMPLE_CHUNK)))
-    return np.concatenate([surface.sample(part).blades for part in parts])
+    return np.concatenate([surface.sample_blades(part) for part in parts])
 
 
 def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
@@ -128,7 +128,7 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
     path = cell_derivatives(grid(centre))
     cosine = cell_derivatives(grid(radius[:, None] * u))
     sine = cell_derivatives(grid(radius[:, None] * v))
-    r0, _, _ = cell_bounds(grid(radius[:, None]))
+    r0, r1, _ = cell_bounds(grid(radius[:, None]))
     _, n1, n2 = cell_bounds(grid(normal))
     norm = lambda x: np.sqrt(np.sum(x * x, axis=-1))  # noqa: E731
     # max over theta of |G| = |a + B cos theta + C sin theta|: on ANGLES angles, plus the most
@@ -155,7 +155,6 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
     turning = (np.sqrt(0.5 * (bb + cc) + np.sqrt(0.25 * (bb - cc) ** 2 + bc * bc))
                + np.hypot(norm(cosine.second_radius), norm(sine.second_radius)))
     axial, across = _axial_speed(grid(normal), path, n1)
-    _, r1, _ = cell_bounds(grid(radius[:, None]))
     sampled = grid(radius)
     least = np.maximum(np.minimum(sampled[:, :-1], sampled[:, 1:]) - 0.5 * r1 / cells, 0.0)  # <= r in the cell
     terms = dict(A=scale * along, B=scale * twist, Rm=scale * r0, N1=n1, N2=n2, Ar=scale * turning,
@@ -459,6 +458,27 @@ def _widened(cells: _Cells, table: _RangeMax, names, t: np.ndarray) -> dict:
     return wide
 
 
+class _IntervalErrors:
+    """``_interval_errors`` of one placement (its family, term table and count around), remembered
+    for the last few ring sets: placing asks it of the same rings up to three times in a row (the
+    last round of raising, the first of splitting, the test for relaxing). The arrays returned
+    are shared: read only."""
+
+    KEEP = 4
+
+    def __init__(self, family: _Surface, table: _RangeMax, names, around: int):
+        self.family, self.table, self.names, self.around = family, table, names, around
+        self._known: dict = {}
+
+    def __call__(self, cells: _Cells, t: np.ndarray):
+        key = (t.tobytes(), cells.cells, cells.closed_rate)
+        if key not in self._known:
+            if len(self._known) >= self.KEEP:
+                self._known.pop(next(iter(self._known)))
+            self._known[key] = _interval_errors(self.family, cells, self.table, self.names, t, self.around)
+        return self._known[key]
+
+
 def _plan(family: _Surface, tolerance: float) -> tuple[_Cells, int, np.ndarray, np.ndarray]:
     """The sampled cells, the count around and the per-cell density and counts for ``tolerance``."""
     if not (math.isfinite(tolerance) and tolerance > 0.0):
@@ -518,10 +538,11 @@ def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarr
     """Rings equidistributing ``density``, raised where an interval's bound misses (see the module doc)."""
     surface, kind, closed = family.surface, family.kind, family.closed
     names = sorted(cells.terms)
-    table = _RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1))
-    t, density = _raised(family, cells, table, names, around, density, counts, tolerance)
-    t, bound = _split_missed(family, cells, table, names, t, around, tolerance)
-    error, first, last, _ = _interval_errors(family, cells, table, names, t, around)
+    errors = _IntervalErrors(family, _RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1)),
+                             names, around)
+    t, density = _raised(errors, cells, density, counts, tolerance)
+    t, bound = _split_missed(errors, cells, t, tolerance)
+    error, first, last, _ = errors(cells, t)
     if np.mean(error) < RELAX_BELOW * tolerance:
         # The leading-term spacing was pessimistic here (most intervals' bound is well below the
         # tolerance): lower the density over each cell as its intervals' bounds allow (E grows
@@ -531,9 +552,8 @@ def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarr
         touched = np.repeat(first - np.cumsum(lengths) + lengths, lengths) + np.arange(lengths.sum())
         np.maximum.at(factor, touched, np.repeat(np.sqrt(np.clip(error / tolerance, 1.0 / 16.0, 1.0)), lengths))
         lowered = density * np.where(factor > 0.0, factor, 1.0).reshape(density.shape)
-        relaxed, _ = _raised(family, cells, table, names, around, lowered, _ring_counts(lowered, cells.cells),
-                             tolerance)
-        relaxed, relaxed_bound = _split_missed(family, cells, table, names, relaxed, around, tolerance)
+        relaxed, _ = _raised(errors, cells, lowered, _ring_counts(lowered, cells.cells), tolerance)
+        relaxed, relaxed_bound = _split_missed(errors, cells, relaxed, tolerance)
         if len(relaxed) < len(t):
             t, bound = relaxed, relaxed_bound
     if kind == "circles" and closed:
@@ -545,19 +565,19 @@ def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarr
             if rate <= cells.closed_rate:
                 break
             cells = replace(cells, closed_rate=rate * HOLONOMY_MARGIN)
-            t, bound = _split_missed(family, cells, table, names, t, around, tolerance)
+            t, bound = _split_missed(errors, cells, t, tolerance)
         else:
             raise InvalidInputError(f"surface '{surface.name}': the closed loop's frame holonomy does not settle")
     return TolerancePlan(around, t, bound)
 
 
-def _raised(family, cells, table, names, around, density, counts, tolerance):
+def _raised(errors, cells, density, counts, tolerance):
     """(rings equidistributing ``density``, the density): raised over the cells of the intervals
     whose bound misses, as their error needs, and placed again (at most DENSITY_ROUNDS times)."""
     t = None
     for _ in range(DENSITY_ROUNDS):
         t = _place(density, counts, cells.cells)
-        error, first, last, _ = _interval_errors(family, cells, table, names, t, around)
+        error, first, last, _ = errors(cells, t)
         missed = error > tolerance
         if not np.any(missed):
             break
@@ -573,10 +593,11 @@ def _raised(family, cells, table, names, around, density, counts, tolerance):
     return t, density
 
 
-def _split_missed(family, cells, table, names, t, around, tolerance):
+def _split_missed(errors, cells, t, tolerance):
     """Split each interval whose bound misses into as many equal parts as its maxima need."""
+    family, around = errors.family, errors.around
     for _ in range(64):
-        error, _, _, terms = _interval_errors(family, cells, table, names, t, around)
+        error, _, _, terms = errors(cells, t)
         missed = np.flatnonzero(error > tolerance)
         if missed.size == 0:
             return t, float(error.max())
