@@ -55,7 +55,7 @@ def test_neuron_junctions_and_soma(color_by, split):
 
     lines = read_centerlines(str(smallest_neuron()))
     kinds = lines.kinds.copy()
-    kinds[np.flatnonzero(lines.parents < 0)] = 1  # the root a soma: its chains go the per-chain way
+    kinds[np.flatnonzero(lines.parents < 0)] = 1  # the root a soma: its chains take their outside radii
     lines = replace(lines, kinds=kinds)
     assert_same(lines, TubeOptions(color_by=color_by, split=split))
 
@@ -159,6 +159,52 @@ def test_random_trees(count, seed, split):
     radii = rng.uniform(0.05, 0.4, size=count)
     lines = Centerlines(points=points, parents=parents, radii=radii, source="tree", units="um")
     assert_same(lines, TubeOptions(split=split, color_by="segment"))
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(3, 40), st.integers(0, 2**31 - 1), st.integers(1, 4), st.booleans())
+def test_random_trees_with_a_soma(count, seed, soma_nodes, split):
+    """Chains with nodes inside the soma (batched with the per-chain path's radii: each node
+    inside takes its nearest outside node's) give the per-chain path's meshes."""
+    from cgamesh.inputs.centerlines import Centerlines
+
+    rng = np.random.default_rng(seed)
+    parents = np.array([-1] + [int(rng.integers(0, i)) for i in range(1, count)])
+    points = np.zeros((count, 3))
+    for i in range(1, count):
+        points[i] = points[parents[i]] + rng.choice([-1.0, 1.0]) * np.eye(3)[rng.integers(0, 3)] * rng.uniform(0.5, 3.0)
+    radii = rng.uniform(0.05, 0.4, size=count)
+    kinds = np.zeros(count, dtype=np.int64)
+    soma = rng.choice(count, size=min(soma_nodes, count), replace=False)
+    kinds[soma] = 1
+    radii[soma] = rng.uniform(1.0, 3.0, size=len(soma))  # a soma far fatter than its neurites
+    lines = Centerlines(points=points, parents=parents, radii=radii, kinds=kinds, source="tree", units="um")
+    assert_same(lines, TubeOptions(split=split, color_by="radius"))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.lists(st.booleans(), min_size=1, max_size=9), min_size=1, max_size=6), st.integers(0, 2**31 - 1))
+def test_outside_radii_are_the_per_chain_paths(inside_lists, seed):
+    """Each node inside takes the radius of the nearest node of its chain outside, the earlier
+    of two as near: centerline_pipeline._tube's argmin, chain by chain."""
+    from cgamesh.meshing.batch_pass.chains import _outside_radii
+
+    counts = np.array([len(c) for c in inside_lists])
+    inside = np.concatenate([np.array(c) for c in inside_lists])
+    first = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    chain_of = np.repeat(np.arange(len(counts)), counts)
+    radii = np.random.default_rng(seed).uniform(0.1, 5.0, size=len(inside))
+    all_inside = np.bincount(chain_of, weights=inside, minlength=len(counts)) == counts
+    replace = inside & ~all_inside[chain_of]  # as tube_pieces asks: chains with a node outside
+    got = _outside_radii(radii, replace, first[chain_of], (first + counts - 1)[chain_of])
+    for k, (a, c) in enumerate(zip(first, counts)):
+        r, inner = radii[a:a + c], inside[a:a + c]
+        if inner.all():
+            np.testing.assert_array_equal(got[a:a + c], r)  # a chain inside the soma alone is left as it is
+            continue
+        outside = np.flatnonzero(~inner)
+        nearest = outside[np.abs(np.arange(c)[:, None] - outside[None, :]).argmin(axis=1)]
+        np.testing.assert_array_equal(got[a:a + c], r[nearest])
 
 
 def test_progress_counts_every_chain_in_chunks():

@@ -294,7 +294,10 @@ def _rings(p, radii, radius_slope, tangents, slope, length, u_in, u_out, first_o
     x = ring - centre
     y = line - p[node][:, None, :]
     cross_term = np.matmul(x.reshape(len(node), -1, 3), y.transpose(0, 2, 1)).reshape(x.shape[:4] + (y.shape[1],))
-    square = (x * x).sum(axis=4)[..., None] + (y * y).sum(axis=2)[:, None, None, None, :] - 2.0 * cross_term
+    # the same sum and difference in place (the (N, W, R, K, L) temporaries were most of the time)
+    square = np.add((x * x).sum(axis=4)[..., None], (y * y).sum(axis=2)[:, None, None, None, :])
+    square -= np.multiply(cross_term, 2.0, out=cross_term)
+    del cross_term
     nearest = np.argmin(square, axis=4)
     gap = np.sqrt(np.maximum(np.take_along_axis(square, nearest[..., None], axis=4)[..., 0], 0.0))
     rho = line_radius[np.arange(len(node))[:, None, None, None], nearest]

@@ -3,9 +3,11 @@
 ``tube_pieces`` does for every chain what ``centerline_pipeline._tube`` does for one (soma
 radii, exact duplicates merged, node tangents and ring normals, the chain's local frame, the motion, the mesh,
 its attributes and direction colours, the junction bookkeeping), as arrays over every chain.
-Chains the batched pass does not take (a node inside the soma, fewer than two distinct
-points, or a surface needing a per-chain repair, see ``rings``) go through the per-chain
-``single`` function, which also reports the errors of the chains that cannot be meshed.
+A chain with nodes inside the soma is batched too, with the per-chain path's radii
+(``_outside_radii``). Chains the batched pass does not take (all nodes inside the soma, fewer
+than two distinct points, or a surface needing a per-chain repair, see ``rings``) go through
+the per-chain ``single`` function, which also reports the errors of the chains that cannot be
+meshed.
 Chains are meshed in chunks of about CHUNK_RINGS rings, so scratch memory stays bounded and
 progress is reported per chunk.
 """
@@ -52,6 +54,26 @@ def _segment_tangents(p: np.ndarray, first: np.ndarray, count: np.ndarray) -> np
     return t / np.linalg.norm(t, axis=1, keepdims=True)
 
 
+def _outside_radii(node_radii: np.ndarray, inside: np.ndarray, chain_first: np.ndarray,
+                   chain_last: np.ndarray) -> np.ndarray:
+    """The radii ``centerline_pipeline._tube`` gives a chain's nodes (concatenated, before
+    duplicates merge) when some lie inside the soma: each node inside takes the radius of the
+    nearest node of its chain outside (the earlier of two as near, as argmin picks), so a
+    neurite leaving the soma starts with its own radius. ``inside``: nodes to replace, only of
+    chains with a node outside; ``chain_first`` / ``chain_last``: each node's chain's ends."""
+    if not inside.any():
+        return node_radii
+    n = len(node_radii)
+    index = np.arange(n)
+    before = np.maximum.accumulate(np.where(inside, -1, index))  # the last node outside so far
+    after = np.minimum.accumulate(np.where(inside, n, index)[::-1])[::-1]  # the next one outside
+    has_before, has_after = before >= chain_first, after <= chain_last
+    source = np.where(has_after & (~has_before | (after - index < index - before)), after, before)
+    out = node_radii.copy()
+    out[inside] = node_radii[source[inside]]
+    return out
+
+
 def _interp(values: np.ndarray, first: np.ndarray, count: np.ndarray, chain: np.ndarray, s: np.ndarray) -> np.ndarray:
     """``np.interp(s, arange(count), values[chain's nodes])`` for every vertex, with numpy's formula."""
     last = count[chain] - 1
@@ -87,18 +109,19 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
     distinct[first[counts > 0]] = True
     kept_counts = np.bincount(chain_of[distinct], minlength=total)
     meshable = ~soma_only & (kept_counts >= 2)
-    batched = meshable & ~mixed
+    batched = meshable
     # per-node arrays of the distinct nodes of meshable chains
     take = distinct & meshable[chain_of]
     m_nodes, m_chain = nodes[take], chain_of[take]
     m_count = kept_counts * meshable
     m_first = np.concatenate([[0], np.cumsum(m_count)[:-1]]).astype(np.int64)
     m_p = points[m_nodes]
-    m_r = radii[m_nodes]
+    m_r = _outside_radii(radii[nodes], soma[nodes] & mixed[chain_of], first[chain_of],
+                         (first + counts - 1)[chain_of])[take]
     m_t = (envelope_normals(m_p, m_r, _segment_tangents(m_p, m_first[meshable], m_count[meshable]),
                             m_first[meshable], m_count[meshable]) if len(m_p) else np.zeros((0, 3)))
 
-    fallback = meshable & mixed
+    fallback = np.zeros(total, dtype=bool)
     rings_of = (m_count - 1) * (options.subdivide + 1) + 1
     # chunks of about CHUNK_RINGS rings of batched chains; a chain meshed alone joins the chunk
     # it falls in by index, so pieces come out in chain order chunk after chunk
