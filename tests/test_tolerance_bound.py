@@ -43,6 +43,20 @@ def measured(surface, plan, kind: str) -> float:
     return grid_deviation(surface, plan.t, grid, CIRCLES).max
 
 
+def placed_terms(surface, tolerance: float, kind: str, closed: bool = False):
+    """(plan, cells, table, names, error, terms) of the plan placed for ``tolerance``: each
+    interval's bound and its terms, as the plan prices them (tolerance_plan's private tables)."""
+    from cgamesh.meshing import tolerance_plan
+
+    prepared = tolerance_plan.PreparedPlan(surface, tolerance, kind, closed)
+    plan = prepared.place()
+    cells = prepared._cells
+    names = sorted(cells.terms)
+    table = tolerance_plan._RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1))
+    error, _, _, terms = tolerance_plan._interval_errors(prepared._family, cells, table, names, plan.t, plan.around)
+    return plan, cells, table, names, error, terms
+
+
 def ribbon_spec(a, b, curve: str, weights=None) -> SurfaceSpec:
     weights = [1.0] * len(a) if weights is None else weights
     controls = tuple(PointPairControl(tuple(map(float, p)), tuple(map(float, q)), float(w), HERE)
@@ -110,16 +124,10 @@ def test_the_ribbon_twist_bound_covers_every_interval_alone(log_scale, distance,
     alone, is at least each interval's measured deviation wherever it applies, on random flat
     and twisted ribbons (the plan's bound is the smaller of two, so the end-to-end tests would
     not notice one that fails), and the plan's bound is that minimum."""
-    from cgamesh.meshing import tolerance_plan
     from cgamesh.meshing.ribbon_twist import ribbon_twist_error
 
     surface = random_ribbon(log_scale, distance, curve, count, twist, flat, seed)
-    prepared = tolerance_plan.PreparedPlan(surface, 10.0**log_relative * surface.frame.scale, "point_pairs")
-    plan = prepared.place()
-    cells = prepared._cells
-    names = sorted(cells.terms)
-    table = tolerance_plan._RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1))
-    error, _, _, terms = tolerance_plan._interval_errors(prepared._family, cells, table, names, plan.t, plan.around)
+    plan, _, _, _, error, terms = placed_terms(surface, 10.0**log_relative * surface.frame.scale, "point_pairs")
     h = np.diff(plan.t)
     bubble = ribbon_twist_error(terms, h, plan.around)
     whole = terms["A"] * h * h / 8.0 + terms["B"] * h / (4.0 * (plan.around - 1))
@@ -137,18 +145,12 @@ def test_a_flat_ribbons_twist_is_tangent():
     without the tangential part is the smaller one on most intervals at 1e-4 (83% of them, with 11
     across: enough for the bubble's shift, kappa |gamma_t|, to be small)."""
     from cgamesh.inputs.scene import load_scene
-    from cgamesh.meshing import tolerance_plan
     from cgamesh.meshing.ribbon_twist import ribbon_twist_error
 
     spec = load_scene("examples/fig12_cocircular_chords.yaml").surfaces[0]
     surface = build_surface(spec)
-    prepared = tolerance_plan.PreparedPlan(surface, 1e-4 * surface.frame.scale, "point_pairs")
-    plan = prepared.place()
-    cells = prepared._cells
+    plan, cells, _, _, _, terms = placed_terms(surface, 1e-4 * surface.frame.scale, "point_pairs")
     assert np.max(cells.terms["Nt"] / cells.terms["B"]) < 0.2
-    names = sorted(cells.terms)
-    table = tolerance_plan._RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1))
-    _, _, _, terms = tolerance_plan._interval_errors(prepared._family, cells, table, names, plan.t, plan.around)
     h = np.diff(plan.t)
     whole = terms["A"] * h * h / 8.0 + terms["B"] * h / (4.0 * (plan.around - 1))
     assert np.mean(ribbon_twist_error(terms, h, plan.around) < whole) >= 0.75
@@ -218,12 +220,7 @@ def test_the_normal_projection_bounds_every_interval_alone(log_scale, distance, 
 
     centres, normals, radii, weights = tilted_flaring_tube(log_scale, distance, curve, count, tilt, flare, seed)
     surface = build_surface(spec_of(centres, normals, radii, curve=curve, weights=weights))
-    prepared = tolerance_plan.PreparedPlan(surface, 10.0**log_relative * surface.frame.scale, "circles")
-    plan = prepared.place()
-    cells = prepared._cells
-    names = sorted(cells.terms)
-    table = tolerance_plan._RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1))
-    _, _, _, terms = tolerance_plan._interval_errors(prepared._family, cells, table, names, plan.t, plan.around)
+    plan, cells, table, names, _, terms = placed_terms(surface, 10.0**log_relative * surface.frame.scale, "circles")
     wide = tolerance_plan._widened(cells, table, names, plan.t)
     normal = normal_projection_error(terms, wide, np.diff(plan.t), plan.around, cells.closed_rate)
     grid = mesh_circle_surface(surface, plan.around, t=plan.t).positions.reshape(plan.rings, plan.around + 1, 3)
@@ -247,12 +244,7 @@ def test_the_error_normal_to_the_surface_is_what_bounds_tubes(path, twist_share,
 
     spec = load_scene(path).surfaces[0]
     surface = build_surface(spec)
-    prepared = tolerance_plan.PreparedPlan(surface, 1e-3 * surface.frame.scale, "circles", spec.closed)
-    plan = prepared.place()
-    cells = prepared._cells
-    names = sorted(cells.terms)
-    table = tolerance_plan._RangeMax(np.stack([cells.terms[name].ravel() for name in names], axis=1))
-    error, _, _, terms = tolerance_plan._interval_errors(prepared._family, cells, table, names, plan.t, plan.around)
+    plan, cells, table, names, error, terms = placed_terms(surface, 1e-3 * surface.frame.scale, "circles", spec.closed)
     sag = terms["Rm"] * (1.0 - np.cos(np.pi / plan.around))
     h = np.diff(plan.t)
     n1 = terms["N1"]
