@@ -305,3 +305,25 @@ def test_opposite_circles_unaligned_interpolating_through_a_line_are_refused_whe
                                               r"radius unbounded\); controls 0 and 1 have opposite orientations "
                                               r"\(align: false\); set align: true, or interpolation: motor$")
     assert not (tmp_path / "o.glb").exists()
+
+
+@pytest.mark.parametrize("points, radius, pattern", [
+    ([[0, 0, 0], [1e-310, 0, 0], [2e-310, 1e-310, 0]], "1e-3", r"point 0: expected lengths between 1e-150 and 1e\+150 .*got a step of 1e-310"),
+    ([[0, 0, 0], [1e-200, 0, 0], [1, 1, 0]], "0.1", r"point 0: .*got a step of 1e-200 to the next point"),
+    ([[0, 0, 0], [1e300, 0, 0], [2e300, 1e300, 0]], "1", r"point 1: .*got a coordinate of 1e\+300"),
+    ([[0, 0, 0], [1, 0, 0], [2, 1, 0]], "1e-310", r"point 0: .*got a radius of 1e-310"),
+    ([[0, 0, 0], [1, 0, 0], [2, 1, 0]], "1e200", r"point 0: .*got a radius of 1e\+200"),
+])
+def test_centrelines_beyond_float64_lengths_are_refused_where(tmp_path, points, radius, pattern):
+    """Steps, coordinates and radii whose squares would underflow or overflow are one located line,
+    before any arithmetic (no numpy warning: run() makes every warning an error), nothing written."""
+    path = tmp_path / "lines.npz"
+    np.savez(path, points=np.array(points, dtype=float), offsets=np.array([0, len(points)]))
+    refused([path, "-o", tmp_path / "t.glb", "--radius", radius], pattern)
+    assert not (tmp_path / "t.glb").exists()
+
+
+def test_a_skeleton_node_too_close_to_its_parent_is_named_with_its_line(tmp_path):
+    path = tmp_path / "tree.swc"
+    path.write_text("# a neuron\n1 1 0 0 0 1 -1\n2 3 1e-200 0 0 0.5 1\n3 3 5 0 0 0.5 2\n")
+    refused([path, "-o", tmp_path / "t.glb"], r"node 1 \(line 2\): .*got a step of 1e-200")
