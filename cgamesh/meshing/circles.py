@@ -437,9 +437,7 @@ def distinct_rings(centre: np.ndarray, normal: np.ndarray, radius: np.ndarray, s
     their boundary) gives way. Where the last ring is too near the ring kept before it, that
     one gives way instead (the surface's end stays where it is).
     """
-    centre, radius = centre / size, radius / size  # relative: no length of 1e-300 underflows
-    step = (np.linalg.norm(np.diff(centre, axis=0), axis=1) + np.abs(np.diff(radius))
-            + np.maximum(radius[1:], radius[:-1]) * np.linalg.norm(np.diff(normal, axis=0), axis=1))
+    step = ring_steps(centre, normal, radius, size)
     if np.all(step > DISTINCT_RING_FRACTION):
         return np.ones(len(centre), dtype=bool)
     along = np.concatenate([[0.0], np.cumsum(step)])
@@ -457,6 +455,16 @@ def distinct_rings(centre: np.ndarray, normal: np.ndarray, radius: np.ndarray, s
     keep = np.zeros(len(along), dtype=bool)
     keep[first] = True
     return keep
+
+
+def ring_steps(centre: np.ndarray, normal: np.ndarray, radius: np.ndarray, size) -> np.ndarray:
+    """(..., K - 1) a bound on how far any vertex moves from each ring to the next, relative to
+    ``size`` (a scalar, or one per ring: (..., K)): |dc| + |dr| + r |dn| of circles (..., K, 3),
+    (..., K). ``distinct_rings``' step, shared by the batched passes so that they decide alike."""
+    size = np.asarray(size, dtype=np.float64)
+    centre, radius = centre / size[..., None], radius / size  # relative: no length of 1e-300 underflows
+    return (np.linalg.norm(np.diff(centre, axis=-2), axis=-1) + np.abs(np.diff(radius, axis=-1))
+            + np.maximum(radius[..., 1:], radius[..., :-1]) * np.linalg.norm(np.diff(normal, axis=-2), axis=-1))
 
 
 def _grid_weld(along: int, around: int, closed: bool) -> np.ndarray:

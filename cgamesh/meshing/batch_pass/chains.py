@@ -109,7 +109,6 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
     distinct[first[counts > 0]] = True
     kept_counts = np.bincount(chain_of[distinct], minlength=total)
     meshable = ~soma_only & (kept_counts >= 2)
-    batched = meshable
     # per-node arrays of the distinct nodes of meshable chains
     take = distinct & meshable[chain_of]
     m_nodes, m_chain = nodes[take], chain_of[take]
@@ -125,13 +124,13 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
     rings_of = (m_count - 1) * (options.subdivide + 1) + 1
     # chunks of about CHUNK_RINGS rings of batched chains; a chain meshed alone joins the chunk
     # it falls in by index, so pieces come out in chain order chunk after chunk
-    chunk_of = np.cumsum(np.where(batched, rings_of, 0)) // CHUNK_RINGS
+    chunk_of = np.cumsum(np.where(meshable, rings_of, 0)) // CHUNK_RINGS
     bounds = np.flatnonzero(np.diff(chunk_of)) + 1
     skipped: list[tuple[int, str]] = []
-    meshed = batched.copy()
+    meshed = meshable.copy()
     scratch_t, scratch_s = tangents.copy(), segment_of.copy()
     for chunk in np.split(np.arange(total), bounds) if total else []:
-        members = chunk[batched[chunk]]
+        members = chunk[meshable[chunk]]
         batched_meshes: dict[int, SurfaceMesh] = {}
         if len(members):
             result = _mesh_chunk(members, m_first, m_count, m_p, m_t, m_r, options)
@@ -142,7 +141,7 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
             progress(chains[int(members[-1])].label, len(members))
         # the per-chain path for the rest of the chunk, in order, with its own errors
         pieces_by_chain: dict[int, SurfaceMesh | None] = {}
-        for index in chunk[~batched[chunk] | fallback[chunk]]:
+        for index in chunk[~meshable[chunk] | fallback[chunk]]:
             try:
                 pieces_by_chain[int(index)] = single(chains[index], int(index), scratch_t, scratch_s)
             except CgameshError as error:
@@ -153,7 +152,7 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
                 progress(chains[int(index)].label, 1)
                 continue
             meshed[index] = pieces_by_chain[int(index)] is not None
-            if not batched[index]:  # a batched chain handed back was counted with its chunk
+            if not meshable[index]:  # a batched chain handed back was counted with its chunk
                 progress(chains[int(index)].label, 1)
         for piece in _ordered(batched_meshes, pieces_by_chain):
             sink(piece)

@@ -22,7 +22,7 @@ from cgamesh.meshing.batch_pass.circle_rows import CircleRows
 from cgamesh.meshing.batch_pass.frames import transported_axes
 from cgamesh.meshing.batch_pass.motions import ChainMotions
 from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, FOLD_AGREEMENT, NEAR_ZERO_FRACTION, OUTWARD_TRUST, STATIONARY_FRACTION,
-                                     RingNormals, fold_screen, frame_values)
+                                     RingNormals, fold_screen, frame_values, ring_steps)
 
 
 @dataclass(frozen=True)
@@ -105,9 +105,7 @@ def _coincident_rings(rings: _BladeRings, ring_chain: np.ndarray, chains: int) -
     mesh (consecutive rings within DISTINCT_RING_FRACTION of the chain's size, as after a step
     of 1e-7 of the radius): the per-chain path drops those rings or reports the chain. Its
     step, elementwise on the same circles, so the same decision."""
-    centre, radius = rings.centre / rings.scale[:, None], rings.radius / rings.scale
-    step = (np.linalg.norm(centre[1:] - centre[:-1], axis=1) + np.abs(radius[1:] - radius[:-1])
-            + np.maximum(radius[1:], radius[:-1]) * np.linalg.norm(rings.normal[1:] - rings.normal[:-1], axis=1))
+    step = ring_steps(rings.centre, rings.normal, rings.radius, rings.scale)
     close = (ring_chain[1:] == ring_chain[:-1]) & ~(step > DISTINCT_RING_FRACTION)
     return np.bincount(ring_chain[1:][close], minlength=chains) > 0
 

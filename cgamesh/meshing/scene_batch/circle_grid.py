@@ -31,7 +31,7 @@ from cgamesh.geometry.surface import carried_velocity
 from cgamesh.meshing import normals as normal_field
 from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION,
                                      OUTWARD_TRUST, STATIONARY_FRACTION, STATIONARY_OFFSET, _grid_weld, _wound_grid,
-                                     _add_cap, drop_zero_area, frame_values)
+                                     _add_cap, drop_zero_area, frame_values, ring_steps)
 from cgamesh.meshing.mesh import SurfaceMesh
 
 # An outward estimate or sum this close (relative) to its decision threshold is recomputed the
@@ -119,10 +119,7 @@ def _nearby_frames(sampler, surface, t, u, origin, scale):
 
 def _distinct(centre, normal, radius, scale) -> np.ndarray:
     """(S,) circles.distinct_rings keeps every ring (centre (S, K, 3), radius (S, K), scale (S,))."""
-    centre, radius = centre / scale[:, None, None], radius / scale[:, None]
-    step = (np.linalg.norm(np.diff(centre, axis=1), axis=2) + np.abs(np.diff(radius, axis=1))
-            + np.maximum(radius[:, 1:], radius[:, :-1]) * np.linalg.norm(np.diff(normal, axis=1), axis=2))
-    return np.all(step > DISTINCT_RING_FRACTION, axis=1)
+    return np.all(ring_steps(centre, normal, radius, scale[:, None]) > DISTINCT_RING_FRACTION, axis=1)
 
 
 def mesh_circle_group(names, sampler, origin: np.ndarray, scale: np.ndarray, closed: bool, around: int,

@@ -15,7 +15,7 @@ import numpy as np
 from cgamesh.geometry.curves import split_parameter
 from cgamesh.geometry.curves.bezier import Bezier, RationalBezier
 from cgamesh.geometry.curves.kochanek_bartels import hermite
-from cgamesh.geometry.motor_surface import SCAN_SAMPLES_PER_SEGMENT, circle_blade_rates, circle_blades
+from cgamesh.geometry.motor_surface import SCAN_SAMPLES_PER_SEGMENT, circle_blades_and_rates
 from cgamesh.geometry.motors import GLOBAL_KINDS, MIN_NORMAL_LENGTH, MotionState
 from cgamesh.geometry.projection import project
 from cgamesh.geometry.surface import MIN_MARGIN
@@ -110,5 +110,5 @@ class MotorSampler:
             normal = h / length[:, None]
             d_normal = (dh - normal * np.einsum("ai,ai->a", normal, dh)[:, None]) / length[:, None]
             state = MotionState(value[:, :3], normal, value[:, 6], rate[:, :3], d_normal, rate[:, 6], length)
-            blades, rates = circle_blades(state), circle_blade_rates(state)
+            blades, rates = circle_blades_and_rates(state)
         return blades, rates, np.ones(len(t), dtype=bool)
