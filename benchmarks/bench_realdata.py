@@ -28,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from timing import best_wall_and_cpu  # this script's folder is on sys.path
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
@@ -190,13 +192,8 @@ def per_surface_overhead(counts: list[int], repeat: int = 1) -> None:
     print(f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     for n in counts:
         polylines = [rng.normal(size=(2, 3)) * 10.0 for _ in range(n)]
-        wall = cpu = float("inf")
-        for _ in range(max(repeat, 1)):
-            start, start_cpu = time.perf_counter(), time.process_time()
-            built = tubes(polylines, radii=0.5, units="mm")
-            wall = min(wall, time.perf_counter() - start)
-            cpu = min(cpu, time.process_time() - start_cpu)
-            assert sum(m.vertex_count for m, _ in built.surfaces) == n * 5 * (AROUND + 1), "vertex count"
+        wall, cpu, built = best_wall_and_cpu(max(repeat, 1), lambda: tubes(polylines, radii=0.5, units="mm"))
+        assert sum(m.vertex_count for m, _ in built.surfaces) == n * 5 * (AROUND + 1), "vertex count"
         print(f"per-surface overhead, N = {n:>6}: {1e6 * wall / n:.1f} us per surface wall, "
               f"{1e6 * cpu / n:.1f} us CPU (target < 50 us)")
 

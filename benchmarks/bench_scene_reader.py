@@ -28,7 +28,6 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +35,7 @@ import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from timing import best_of  # noqa: E402 (this script's folder is on sys.path)
+from timing import best_wall_and_cpu as timed  # noqa: E402 (this script's folder is on sys.path)
 
 from cgamesh.inputs.scene import load_scene  # noqa: E402
 
@@ -70,20 +69,6 @@ def flow_style(document: dict) -> str:
         resolution = surface["resolution"]
         lines.append(f"    resolution: {{around: {resolution['around']}, along: {resolution['along']}}}")
     return "\n".join(lines) + "\n"
-
-
-def timed(repeats: int, work) -> tuple[float, float, object]:
-    """(shortest wall time, shortest CPU time of this process, last result) of ``work()``."""
-    cpu = []
-
-    def measured():
-        start = time.process_time()
-        result = work()
-        cpu.append(time.process_time() - start)
-        return result
-
-    wall, result = best_of(repeats, measured)
-    return wall, min(cpu), result
 
 
 def rates(megabytes: float, wall: float, cpu: float) -> str:

@@ -152,7 +152,7 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     up = "y" if options.up == "y" else "z"
     scalar = lines.scalars.get(options.color_by)
     chains, junctions = _chains(lines)
-    _check_scale(lines, points, radii, chains)
+    _check_scale(lines, points, chains)
     soma = lines.kinds == SOMA if lines.kinds is not None else np.zeros(len(points), dtype=bool)
     tangents = np.zeros_like(points)
     tangents[:, 2] = 1.0
@@ -240,6 +240,13 @@ def _check_options(lines: Centerlines, options: TubeOptions) -> None:
                                 f"field of the file ({fields}), got {options.color_by!r}")
 
 
+# Lengths the meshing squares and multiplies (steps between points, radii, coordinates) stay
+# within these, so their squares and products are normal float64 numbers: a step of 1e-310 or
+# a coordinate of 1e300 would underflow or overflow to zero or infinity mid-way and surface as
+# an unrelated error (a lost circle plane) after a page of numpy warnings.
+SMALLEST_LENGTH, LARGEST_LENGTH = 1e-150, 1e150
+
+
 def _radii(lines: Centerlines, options: TubeOptions) -> np.ndarray:
     """Each node's radius: the constant one or the file's, raised to the minimum radius."""
     if options.radius is not None:
@@ -249,35 +256,29 @@ def _radii(lines: Centerlines, options: TubeOptions) -> np.ndarray:
     else:
         radii = np.array(lines.radii, dtype=np.float64)
     if options.min_radius is not None:
-        return np.maximum(radii, options.min_radius)
+        radii = np.maximum(radii, options.min_radius)
     zero = np.flatnonzero(radii <= 0.0)
     if zero.size:
         raise InvalidInputError(f"{lines.source}: {lines.node_name(int(zero[0]))}: expected a radius > 0, got "
                                 f"{radii[zero[0]]:g} ({zero.size} such); give a minimum radius (--min-radius R)")
+    odd = np.flatnonzero((radii < SMALLEST_LENGTH) | (radii > LARGEST_LENGTH))
+    if odd.size:
+        raise InvalidInputError(f"{lines.source}: {lines.node_name(int(odd[0]))}: expected lengths between "
+                                f"{SMALLEST_LENGTH:g} and {LARGEST_LENGTH:g} {lines.units}, got a radius of "
+                                f"{radii[odd[0]]:g}")
     return radii
 
 
-# Lengths the meshing squares and multiplies (steps between points, radii, coordinates) stay
-# within these, so their squares and products are normal float64 numbers: a step of 1e-310 or
-# a coordinate of 1e300 would underflow or overflow to zero or infinity mid-way and surface as
-# an unrelated error (a lost circle plane) after a page of numpy warnings.
-SMALLEST_LENGTH, LARGEST_LENGTH = 1e-150, 1e150
-
-
-def _check_scale(lines: Centerlines, points: np.ndarray, radii: np.ndarray, chains: _ChainList) -> None:
-    """A located InvalidInputError for the first point whose coordinate, radius or step to the
-    next point of its chain (exact duplicates apart: they are merged) is outside
-    [SMALLEST_LENGTH, LARGEST_LENGTH]."""
+def _check_scale(lines: Centerlines, points: np.ndarray, chains: _ChainList) -> None:
+    """A located InvalidInputError for the first point whose coordinate or step to the next
+    point of its chain (exact duplicates apart: they are merged) is outside [SMALLEST_LENGTH,
+    LARGEST_LENGTH] (radii: ``_radii``)."""
     units = lines.units
     expected = f"expected lengths between {SMALLEST_LENGTH:g} and {LARGEST_LENGTH:g} {units}"
     big = np.flatnonzero(np.abs(points).max(axis=1, initial=0.0) > LARGEST_LENGTH)
     if big.size:
         raise InvalidInputError(f"{lines.source}: {lines.node_name(int(big[0]))}: {expected}, got a coordinate of "
                                 f"{np.abs(points[big[0]]).max():g}")
-    odd = np.flatnonzero((radii < SMALLEST_LENGTH) | (radii > LARGEST_LENGTH))
-    if odd.size:
-        raise InvalidInputError(f"{lines.source}: {lines.node_name(int(odd[0]))}: {expected}, got a radius of "
-                                f"{radii[odd[0]]:g}")
     nodes = chains.nodes[chains.offsets[0]:chains.offsets[-1]]
     within = np.ones(max(len(nodes) - 1, 0), dtype=bool)
     within[chains.offsets[1:-1] - chains.offsets[0] - 1] = False  # the last node of a chain has no next

@@ -203,7 +203,7 @@ class _Document:
                     "buffers": self.buffers, "extensionsUsed": self.extensionsUsed,
                     "extensionsRequired": self.extensionsRequired, "materials": self.materials,
                     "meshes": self.meshes, "nodes": self.nodes, "scene": 0, "scenes": self.scenes}
-        return json.dumps(_without_empty(document), separators=(",", ":"), allow_nan=False, skipkeys=True)
+        return json.dumps(_without_empty(document), separators=(",", ":"), allow_nan=False)
 
 
 def _without_empty(members: dict) -> dict:
