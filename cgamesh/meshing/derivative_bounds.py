@@ -60,9 +60,13 @@ class CellDerivatives:
 
     def norms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Upper bounds (segments, S) of |f|, |f'| and |f''| (Euclidean norms) over each cell."""
-        norm = lambda parts: np.sqrt(np.sum(parts * parts, axis=-1))  # noqa: E731
-        return (norm(self.value), norm(np.abs(self.first) + self.first_radius),
-                norm(np.abs(self.second) + self.second_radius))
+        return (lengths(self.value), lengths(np.abs(self.first) + self.first_radius),
+                lengths(np.abs(self.second) + self.second_radius))
+
+
+def lengths(x: np.ndarray) -> np.ndarray:
+    """Euclidean lengths over the last axis (the bounds' one formula for them)."""
+    return np.sqrt(np.sum(x * x, axis=-1))
 
 
 def cell_derivatives(values: np.ndarray) -> CellDerivatives:

@@ -42,7 +42,7 @@ from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
 from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.meshing.circles import transported_frames
 from cgamesh.meshing.dense_transport import transported_axes
-from cgamesh.meshing.derivative_bounds import cell_bounds, cell_derivatives, segment_samples
+from cgamesh.meshing.derivative_bounds import cell_bounds, cell_derivatives, lengths, segment_samples
 from cgamesh.meshing.normal_projection import normal_projection_error, normal_projection_spacing
 from cgamesh.meshing.ribbon_twist import ribbon_twist_error, ribbon_twist_spacing, ribbon_twist_terms
 
@@ -130,30 +130,30 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
     sine = cell_derivatives(grid(radius[:, None] * v))
     r0, r1, _ = cell_bounds(grid(radius[:, None]))
     _, n1, n2 = cell_bounds(grid(normal))
-    norm = lambda x: np.sqrt(np.sum(x * x, axis=-1))  # noqa: E731
     # max over theta of |G| = |a + B cos theta + C sin theta|: on ANGLES angles, plus the most
     # g = |G|^2 can grow from the nearest of them to a maximum between (where g' = 0):
     # (spacing^2 / 8) max |g''|, with g'' = 2 |G'|^2 + 2 G . G'' and |G'|, |G''| <= reach.
     a, b, c = path.second, cosine.second, sine.second
     angles = 2.0 * np.pi * np.arange(ANGLES) / ANGLES
-    on_circle = norm(a[..., None, :] + np.cos(angles)[:, None] * b[..., None, :] + np.sin(angles)[:, None] * c[..., None, :])
-    reach = np.sqrt(norm(b) ** 2 + norm(c) ** 2)
-    curvature = 4.0 * reach * reach + 2.0 * norm(a) * reach  # >= max |g''|
+    on_circle = lengths(a[..., None, :] + np.cos(angles)[:, None] * b[..., None, :]
+                        + np.sin(angles)[:, None] * c[..., None, :])
+    reach = np.sqrt(lengths(b) ** 2 + lengths(c) ** 2)
+    curvature = 4.0 * reach * reach + 2.0 * lengths(a) * reach  # >= max |g''|
     spacing = 2.0 * np.pi / ANGLES
     largest = np.sqrt(on_circle.max(axis=-1) ** 2 + spacing * spacing / 8.0 * curvature)
-    along = (largest + norm(path.second_radius)
-             + np.hypot(norm(cosine.second_radius), norm(sine.second_radius)))
+    along = (largest + lengths(path.second_radius)
+             + np.hypot(lengths(cosine.second_radius), lengths(sine.second_radius)))
     # max over theta of |-sin theta B1 + cos theta C1|: the larger singular value of [B1 C1].
     b1, c1 = cosine.first, sine.first
     bb, cc, bc = np.sum(b1 * b1, -1), np.sum(c1 * c1, -1), np.sum(b1 * c1, -1)
     largest = np.sqrt(0.5 * (bb + cc) + np.sqrt(0.25 * (bb - cc) ** 2 + bc * bc))
-    twist = largest + np.hypot(norm(cosine.first_radius), norm(sine.first_radius))
+    twist = largest + np.hypot(lengths(cosine.first_radius), lengths(sine.first_radius))
     # The frame's part of d2x/dt2 alone, max over theta of |(r u)'' cos + (r v)'' sin|: the larger
     # singular value of [(r u)'', (r v)''] (the twist's change along t, for the normal twist bound).
     b2, c2 = cosine.second, sine.second
     bb, cc, bc = np.sum(b2 * b2, -1), np.sum(c2 * c2, -1), np.sum(b2 * c2, -1)
     turning = (np.sqrt(0.5 * (bb + cc) + np.sqrt(0.25 * (bb - cc) ** 2 + bc * bc))
-               + np.hypot(norm(cosine.second_radius), norm(sine.second_radius)))
+               + np.hypot(lengths(cosine.second_radius), lengths(sine.second_radius)))
     axial, across = _axial_speed(grid(normal), path, n1)
     sampled = grid(radius)
     least = np.maximum(np.minimum(sampled[:, :-1], sampled[:, 1:]) - 0.5 * r1 / cells, 0.0)  # <= r in the cell
@@ -166,13 +166,12 @@ def _axial_speed(normal: np.ndarray, path, n1: np.ndarray) -> tuple[np.ndarray, 
     """Per cell: a lower bound of |n . c'| and an upper bound of |n x c'| (the centre's speed along
     and across the circle's axis). In a cell, c' is within its radius of the divided difference D1
     and n within delta |n'| of its value at the cell's start."""
-    norm = lambda x: np.sqrt(np.sum(x * x, axis=-1))  # noqa: E731
     start, d1 = normal[:, :-1], path.first
-    spread = norm(path.first_radius)
+    spread = lengths(path.first_radius)
     delta = 1.0 / d1.shape[1]
-    slack = delta * n1 * (norm(d1) + spread) + spread
+    slack = delta * n1 * (lengths(d1) + spread) + spread
     along = np.abs(np.sum(start * d1, axis=-1))
-    across = norm(np.cross(start, d1))
+    across = lengths(np.cross(start, d1))
     return np.maximum(along - slack, 0.0), across + slack
 
 
