@@ -216,6 +216,18 @@ def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, d: np.ndarray, n_a
     return signs * (1.0 - 2.0 * ring_parity)[:, None], rows
 
 
+def wound_faces(positions: np.ndarray, normals: np.ndarray, signs: np.ndarray, rows: np.ndarray, along: int,
+                around: int) -> np.ndarray:
+    """The ruling grid's triangles: whole rings wound by their sign (``signs`` (K, M) or (K, 1));
+    by their own geometry against their normals, the quads next to the rings examined vertex by
+    vertex (``rows``) and those between consecutive rings of opposite sign, whose two triangles
+    a vote of vertex signs would wind apart (two vertices of one ring, one of the other; seen on
+    a ribbon starting on a repeated control, where the field's sign at the first ring is a limit)."""
+    faces = grid_faces(along, around, signs[:, :1])
+    examined = np.union1d(rows, np.flatnonzero(signs[1:, 0] != signs[:-1, 0]))
+    return _orient_faces(positions, normals, faces, examined, around) if examined.size else faces
+
+
 def _orient_faces(positions: np.ndarray, normals: np.ndarray, faces: np.ndarray, rows: np.ndarray,
                   columns: int) -> np.ndarray:
     """Wind the triangles of the quads next to rings ``rows`` like their vertex normals (in place).
@@ -302,12 +314,9 @@ def mesh_ribbon_surface(surface: EvolvedSurface, around: int, along: int | None 
         positions[-1] = positions[0]
         normals[-1] = normals[0] * np.sign(np.einsum("mc,mc->", normals[-1], normals[0]) or 1.0)
 
-    # Whole rings wind by their sign; next to rings that reverse, each triangle by its normals.
-    faces = grid_faces(along, around, signs[:, :1])
     positions = positions.reshape(-1, 3)
     normals = normals.reshape(-1, 3)
-    if rows.size:
-        faces = _orient_faces(positions, normals, faces, rows, around)
+    faces = wound_faces(positions, normals, signs, rows, along, around)
     faces = drop_zero_area(positions, faces, np.flatnonzero(size_sq <= NEAR_ZERO_FRACTION**2))
     ends = np.stack([rings.a, 0.5 * (rings.a + rings.b), rings.b], axis=1)
     uvs = uv_map.grid_uvs(uv_map.along_coordinates(ends), around)

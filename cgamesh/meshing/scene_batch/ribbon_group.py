@@ -32,7 +32,7 @@ from cgamesh.geometry.projection import project
 from cgamesh.geometry.surface import MIN_MARGIN, SCAN_SAMPLES_PER_SEGMENT
 from cgamesh.meshing import ribbons
 from cgamesh.meshing import uv as uv_map
-from cgamesh.meshing.circles import drop_zero_area, grid_faces
+from cgamesh.meshing.circles import drop_zero_area
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.normals import expand
 from cgamesh.meshing.ribbons import PairRings, mesh_ribbon_surface
@@ -135,6 +135,9 @@ def _plain_surfaces(a, b, da, db, around: int, along: int) -> np.ndarray:
     return ~(flat | suspicious).reshape(-1, along).any(axis=1)
 
 
+NO_ROWS = np.zeros(0, dtype=np.int64)  # plain surfaces: no ring is examined vertex by vertex
+
+
 def _common_meshes(a, b, da, db, around: int, along: int, closed: bool, plain: np.ndarray, names) -> dict:
     """mesh_ribbon_surface's meshes of the plain surfaces (``_plain_surfaces``), by row of ``plain``:
     the same steps on all their rulings at once (ribbons._continuous_signs without reversing
@@ -168,8 +171,8 @@ def _common_meshes(a, b, da, db, around: int, along: int, closed: bool, plain: n
             surface_positions[-1] = surface_positions[0]
             surface_normals[-1] = surface_normals[0] * np.sign(
                 np.einsum("mc,mc->", surface_normals[-1], surface_normals[0]) or 1.0)
-        faces = grid_faces(along, around, signs[i])
         flat_positions = surface_positions.reshape(-1, 3)
+        faces = ribbons.wound_faces(flat_positions, surface_normals.reshape(-1, 3), signs[i], NO_ROWS, along, around)
         faces = drop_zero_area(flat_positions, faces, np.flatnonzero(size_sq[i] <= ribbons.NEAR_ZERO_FRACTION**2))
         uvs = uv_map.grid_uvs(uv_map.along_coordinates(ends[i]), around)
         meshes[row] = SurfaceMesh(name=names[row], positions=flat_positions, normals=surface_normals.reshape(-1, 3),
