@@ -39,6 +39,10 @@ NEAR_ZERO_FRACTION = 1e-6
 # Consecutive rings whose normals agree less than this (mean cosine below minus it) lie on
 # the two sides of a fold.
 FOLD_AGREEMENT = 0.9
+# Consecutive rings whose normals (after any fold's flip) are on average more than a right angle
+# apart are too far apart for the field's orientation to tell the winding of the triangles
+# between them (the chord need not run along d/dt): those are wound by their own geometry.
+TURNED_AGREEMENT = 0.0
 # The seven-sample estimate of the outward sum decides its sign when the mean |cosine| between
 # normals and radial directions is at least this.
 OUTWARD_TRUST = 0.25
@@ -147,9 +151,10 @@ def _ring_normals(surface: EvolvedSurface, t: np.ndarray, rings: CircleRings, u:
 
 
 def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, u: np.ndarray, field: RingNormals,
-                      theta: np.ndarray, smallest: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Signs (K, M) making the normal field continuous over the whole (t, theta) grid, and
-    which rings (K,) bool were examined vertex by vertex (their field may turn fast).
+                      theta: np.ndarray, smallest: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Signs (K, M) making the normal field continuous over the whole (t, theta) grid, which
+    rings (K,) bool were examined vertex by vertex (their field may turn fast), and which
+    consecutive pairs (K - 1,) bool are turned (``turned_pairs``).
 
     Only rings whose field can reverse between two columns are examined vertex by vertex:
     elsewhere |N| stays above the most N can change in one column step. A reversal counts
@@ -185,7 +190,14 @@ def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, u: np.ndarray, fie
     # all but opposite. A crease (a joint of a linear or C0 spline) turns them by less, and the
     # field there is simply discontinuous: no flip.
     ring_parity = np.concatenate([[0], np.cumsum(agreement < -FOLD_AGREEMENT)]) % 2
-    return signs * (1.0 - 2.0 * ring_parity)[:, None], suspicious
+    return signs * (1.0 - 2.0 * ring_parity)[:, None], suspicious, turned_pairs(agreement)
+
+
+def turned_pairs(agreement: np.ndarray) -> np.ndarray:
+    """Consecutive rings (K - 1,) bool whose normals, after a fold's flip (agreement below
+    -FOLD_AGREEMENT), still agree less than TURNED_AGREEMENT: the step between them is too
+    long for the analytic orientation to wind their triangles (see TURNED_AGREEMENT)."""
+    return (agreement < TURNED_AGREEMENT) & (agreement >= -FOLD_AGREEMENT)
 
 
 def _outward_sum(field: RingNormals, signs: np.ndarray, rings: CircleRings, positions: np.ndarray,
@@ -368,7 +380,7 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
     positions = normal_field.expand(placement, circle_basis)
 
     normals, smallest, near_zero = normal_field.unit_normals(field.raw, theta, field.speed, NEAR_ZERO_FRACTION)
-    signs, turning = _continuous_signs(surface, t, u, field, theta, smallest)
+    signs, turning, turned = _continuous_signs(surface, t, u, field, theta, smallest)
     if _outward_sum(field, signs, rings, positions, normals) < 0.0:
         signs = -signs
     _apply_signs(normals, signs)
@@ -395,10 +407,11 @@ def mesh_circle_surface(surface: EvolvedSurface, around: int, along: int | None 
     faces = grid_faces(along, columns, signs)
     positions = positions.reshape(-1, 3)
     normals = normals.reshape(-1, 3)
-    if np.any(turning):
+    if np.any(turning) or np.any(turned):
         # Next to a fold or a pinch point the vertex normals of one triangle may differ
-        # widely: such triangles are wound by their own geometry.
-        strip = turning[:-1] | turning[1:]
+        # widely, and between rings turned far apart the chord need not follow d/dt: such
+        # triangles are wound by their own geometry.
+        strip = turning[:-1] | turning[1:] | turned
         faces = orient_by_geometry(faces, positions, normals, np.repeat(strip, 2 * around))
     if tangents is not None:
         tangents = tangents.reshape(-1, 4)

@@ -22,7 +22,7 @@ from cgamesh.meshing.batch_pass.circle_rows import CircleRows
 from cgamesh.meshing.batch_pass.frames import transported_axes
 from cgamesh.meshing.batch_pass.motions import ChainMotions
 from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, FOLD_AGREEMENT, NEAR_ZERO_FRACTION, OUTWARD_TRUST, STATIONARY_FRACTION,
-                                     RingNormals, fold_screen, frame_values, ring_steps)
+                                     RingNormals, fold_screen, frame_values, ring_steps, turned_pairs)
 
 
 @dataclass(frozen=True)
@@ -236,7 +236,7 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     uvs[:, :, 0] = np.linspace(0.0, 1.0, columns)[None, :]
     uvs[:, :, 1] = v_coordinate[:, None]
 
-    # faces: circles._wound_grid per chain, local indices; strips by a turning ring by geometry
+    # faces: circles._wound_grid per chain, local indices; strips by a turning ring or turned apart by geometry
     pair = np.flatnonzero(keep_ring[:-1] & within)  # ring k and k + 1 of one kept chain
     swap = flip[ring_chain[pair]]
     j = np.arange(columns - 1, dtype=np.int32)
@@ -246,7 +246,7 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     row = row.reshape(1, -1, 3)
     faces = np.where(swap[:, None, None], row[:, :, [0, 2, 1]], row)  # (P, 2 (columns-1), 3)
     faces += (ring_local[pair] * columns).astype(np.int32)[:, None, None]
-    strip = np.flatnonzero(suspicious[pair] | suspicious[pair + 1])
+    strip = np.flatnonzero(suspicious[pair] | suspicious[pair + 1] | turned_pairs(agreement)[pair])
     if strip.size:
         # the strip's rings among the kept ones (pairs never span a dropped chain)
         at = np.cumsum(keep_ring) - 1

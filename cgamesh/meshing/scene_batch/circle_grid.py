@@ -31,7 +31,7 @@ from cgamesh.geometry.surface import carried_velocity
 from cgamesh.meshing import normals as normal_field
 from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION,
                                      OUTWARD_TRUST, STATIONARY_FRACTION, STATIONARY_OFFSET, _grid_weld, _wound_grid,
-                                     _add_cap, drop_zero_area, frame_values, ring_steps)
+                                     _add_cap, drop_zero_area, frame_values, ring_steps, turned_pairs)
 from cgamesh.meshing.mesh import SurfaceMesh
 
 # An outward estimate or sum this close (relative) to its decision threshold is recomputed the
@@ -244,8 +244,9 @@ def mesh_circle_group(names, sampler, origin: np.ndarray, scale: np.ndarray, clo
     uvs[..., 1] = v_coordinate[:, :, None]
 
     faces = _grid_faces(signs, along, columns)
-    if np.any(turning):
-        _orient_strips(faces, positions.reshape(count, -1, 3), normals.reshape(count, -1, 3), turning, around)
+    strips = turning[:, :-1] | turning[:, 1:] | turned_pairs(agreement).reshape(count, along - 1)
+    if np.any(strips):
+        _orient_strips(faces, positions.reshape(count, -1, 3), normals.reshape(count, -1, 3), strips, around)
     weld = _grid_weld(along, around, closed)
     vertex_count = along * columns
     near_ring = near_zero[0] // along if near_zero[0].size else np.empty(0, np.intp)
@@ -326,10 +327,10 @@ def _grid_faces(signs: np.ndarray, along: int, columns: int) -> np.ndarray:
     return faces.reshape(count, -1, 3)
 
 
-def _orient_strips(faces, positions, normals, turning, around) -> None:
-    """circles.orient_by_geometry on the triangles between rings next to a turning ring, in place:
-    faces (S, F, 3) of positions and normals (S, V, 3); turning (S, K) bool."""
-    strip = turning[:, :-1] | turning[:, 1:]
+def _orient_strips(faces, positions, normals, strip, around) -> None:
+    """circles.orient_by_geometry on the triangles of the strips between rings next to a turning
+    ring or turned apart, in place: faces (S, F, 3) of positions and normals (S, V, 3); strip
+    (S, K - 1) bool."""
     surface, triangle = np.nonzero(np.repeat(strip, 2 * around, axis=1))
     picked = faces[surface, triangle]
     first = positions[surface, picked[:, 0]]
