@@ -68,6 +68,10 @@ CANCELLATION = 1e-2
 FOLD_SINE = 1e-2
 # Fractions along each ruling at which consecutive rulings are compared when neither can reverse.
 _COMPARE_AT = np.array([0.0, 0.5, 1.0])
+# Consecutive rulings whose normals at those fractions neither agree nor oppose (mean cosine, or
+# its negative after a flip, below this) are too far apart for their signs to tell the winding
+# of the quad between them (a fold crossing it diagonally): that quad is wound by geometry.
+TURNED_AGREEMENT = 0.5
 
 
 @dataclass(frozen=True)
@@ -170,9 +174,10 @@ def _may_reverse(n_a: np.ndarray, n_b: np.ndarray, step: float) -> np.ndarray:
 
 
 def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, d: np.ndarray, n_a: np.ndarray,
-                      n_b: np.ndarray, s: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Signs (K, M), or (K, 1) when no ruling can reverse, making the field continuous; and the
-    rings (R,) examined vertex by vertex (those that may reverse, with their neighbours).
+                      n_b: np.ndarray, s: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Signs (K, M), or (K, 1) when no ruling can reverse, making the field continuous; the
+    rings (R,) examined vertex by vertex (those that may reverse, with their neighbours); and
+    the consecutive pairs (K - 1,) bool turned apart (``turned_pairs``).
 
     A reversal between two columns is a fold when dN/ds = N_b - N_a and dN/dt (differentiated
     on the surface) are nearly parallel: the Jacobian of N over (s, t) is singular, as along a
@@ -183,6 +188,7 @@ def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, d: np.ndarray, n_a
     suspicious = _may_reverse(n_a, n_b, s[1] - s[0])
     samples = _unit(_ruling_values(n_a, n_b, _COMPARE_AT, scale))
     agreement = np.einsum("kmc,kmc->k", samples[:-1], samples[1:])
+    turned = turned_pairs(agreement)
     # Each suspicious ring with its two neighbours (np.convolve's "same" mode would return
     # three entries for two rings).
     near = np.array(suspicious, dtype=bool)
@@ -191,7 +197,7 @@ def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, d: np.ndarray, n_a
     rows = np.flatnonzero(near)
     if rows.size == 0:
         flipped = np.cumsum(np.concatenate([[False], agreement < 0.0])) % 2 == 1
-        return np.where(flipped, -1.0, 1.0)[:, None], rows
+        return np.where(flipped, -1.0, 1.0)[:, None], rows, turned
     signs = np.ones((count, len(s)))
     unit = _unit(_ruling_values(n_a[rows], n_b[rows], s, scale[rows]))
     row, column = np.nonzero(np.einsum("rmc,rmc->rm", unit[:, :-1], unit[:, 1:]) < 0.0)
@@ -213,18 +219,25 @@ def _continuous_signs(surface: EvolvedSurface, t: np.ndarray, d: np.ndarray, n_a
     position = np.searchsorted(rows, pairs)
     agreement[pairs] = np.einsum("pmc,pmc->p", signed[position], signed[position + 1])
     ring_parity = np.concatenate([[0], np.cumsum(agreement < 0.0)]) % 2
-    return signs * (1.0 - 2.0 * ring_parity)[:, None], rows
+    return signs * (1.0 - 2.0 * ring_parity)[:, None], rows, turned
+
+
+def turned_pairs(agreement: np.ndarray) -> np.ndarray:
+    """Consecutive rulings (K - 1,) bool whose normals at the _COMPARE_AT fractions (``agreement``,
+    their cosines summed) agree or oppose by less than TURNED_AGREEMENT on average."""
+    return np.abs(agreement) < TURNED_AGREEMENT * len(_COMPARE_AT)
 
 
 def wound_faces(positions: np.ndarray, normals: np.ndarray, signs: np.ndarray, rows: np.ndarray, along: int,
-                around: int) -> np.ndarray:
+                around: int, turned: np.ndarray) -> np.ndarray:
     """The ruling grid's triangles: whole rings wound by their sign (``signs`` (K, M) or (K, 1));
     by their own geometry against their normals, the quads next to the rings examined vertex by
-    vertex (``rows``) and those between consecutive rings of opposite sign, whose two triangles
+    vertex (``rows``), those between consecutive rings of opposite sign, whose two triangles
     a vote of vertex signs would wind apart (two vertices of one ring, one of the other; seen on
-    a ribbon starting on a repeated control, where the field's sign at the first ring is a limit)."""
+    a ribbon starting on a repeated control, where the field's sign at the first ring is a limit),
+    and those between rings ``turned`` (K - 1,) apart (``turned_pairs``)."""
     faces = grid_faces(along, around, signs[:, :1])
-    examined = np.union1d(rows, np.flatnonzero(signs[1:, 0] != signs[:-1, 0]))
+    examined = np.union1d(rows, np.flatnonzero((signs[1:, 0] != signs[:-1, 0]) | turned))
     return _orient_faces(positions, normals, faces, examined, around) if examined.size else faces
 
 
@@ -303,7 +316,7 @@ def mesh_ribbon_surface(surface: EvolvedSurface, around: int, along: int | None 
     d = rings.b - rings.a
     n_a, n_b, scale = _ruling_normals(surface, t, rings, d)
     s = np.linspace(0.0, 1.0, around)
-    signs, rows = _continuous_signs(surface, t, d, n_a, n_b, s, scale)
+    signs, rows, turned = _continuous_signs(surface, t, d, n_a, n_b, s, scale)
     # The documented side: the raw field d x dx/dt at most vertices.
     if np.sum(signs) * (around if signs.shape[1] == 1 else 1) < 0.0:
         signs = -signs
@@ -316,7 +329,7 @@ def mesh_ribbon_surface(surface: EvolvedSurface, around: int, along: int | None 
 
     positions = positions.reshape(-1, 3)
     normals = normals.reshape(-1, 3)
-    faces = wound_faces(positions, normals, signs, rows, along, around)
+    faces = wound_faces(positions, normals, signs, rows, along, around, turned)
     faces = drop_zero_area(positions, faces, np.flatnonzero(size_sq <= NEAR_ZERO_FRACTION**2))
     ends = np.stack([rings.a, 0.5 * (rings.a + rings.b), rings.b], axis=1)
     uvs = uv_map.grid_uvs(uv_map.along_coordinates(ends), around)

@@ -153,6 +153,7 @@ def _common_meshes(a, b, da, db, around: int, along: int, closed: bool, plain: n
     agreement = np.einsum("kmc,kmc->k", np.ascontiguousarray(by_surface[:, :-1]).reshape((-1,) + samples.shape[1:]),
                           np.ascontiguousarray(by_surface[:, 1:]).reshape((-1,) + samples.shape[1:]))
     reversed_ = (agreement < 0.0).reshape(count, along - 1)
+    turned = ribbons.turned_pairs(agreement).reshape(count, along - 1)
     flipped = np.cumsum(np.concatenate([np.zeros((count, 1), dtype=bool), reversed_], axis=1), axis=1) % 2 == 1
     signs = np.where(flipped, -1.0, 1.0)
     # the documented side: the raw field d x dx/dt at most vertices
@@ -172,7 +173,8 @@ def _common_meshes(a, b, da, db, around: int, along: int, closed: bool, plain: n
             surface_normals[-1] = surface_normals[0] * np.sign(
                 np.einsum("mc,mc->", surface_normals[-1], surface_normals[0]) or 1.0)
         flat_positions = surface_positions.reshape(-1, 3)
-        faces = ribbons.wound_faces(flat_positions, surface_normals.reshape(-1, 3), signs[i], NO_ROWS, along, around)
+        faces = ribbons.wound_faces(flat_positions, surface_normals.reshape(-1, 3), signs[i], NO_ROWS, along, around,
+                                    turned[i])
         faces = drop_zero_area(flat_positions, faces, np.flatnonzero(size_sq[i] <= ribbons.NEAR_ZERO_FRACTION**2))
         uvs = uv_map.grid_uvs(uv_map.along_coordinates(ends[i]), around)
         meshes[row] = SurfaceMesh(name=names[row], positions=flat_positions, normals=surface_normals.reshape(-1, 3),
