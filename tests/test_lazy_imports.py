@@ -2,7 +2,8 @@
 
 clifford (seconds to import) serves only as the tests' reference; a GLB build needs neither the
 ray tracer, nor USD, nor the libraries that write other formats, nor pygltflib (the GLB writer
-writes its JSON itself), nor OpenSSL's bindings: each import is resident memory, a large share
+writes its JSON itself), nor OpenSSL's bindings, nor importlib.metadata (with email, socket and
+csv: the version comes from cgamesh.__version__): each import is resident memory, a large share
 of a small input's peak.
 """
 
@@ -16,7 +17,7 @@ from pathlib import Path
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "kb_tube.yaml"
 NEVER_FOR_GLB = ("clifford", "numba", "cgamesh.tracer", "pxr", "trimesh", "xatlas", "pymeshlab", "matplotlib",
                  "dask", "distributed", "cgamesh.batching", "pygltflib", "dataclasses_json", "marshmallow",
-                 "_hashlib", "hmac")
+                 "_hashlib", "hmac", "importlib.metadata", "email")
 
 PROBE = """
 import json, sys

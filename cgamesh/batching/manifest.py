@@ -22,12 +22,9 @@ FORMAT_VERSION = 1
 
 
 def tool_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
+    from cgamesh import __version__
 
-    try:
-        return f"cgamesh {version('cgamesh')}"
-    except PackageNotFoundError:
-        return "cgamesh (not installed)"
+    return f"cgamesh {__version__}"
 
 
 def normalised(options: Mapping) -> dict:
