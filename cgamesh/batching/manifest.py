@@ -15,6 +15,7 @@ import os
 from collections.abc import Mapping
 from pathlib import Path
 
+from cgamesh import __version__
 from cgamesh.errors import InvalidInputError
 
 MANIFEST_NAME = "cgamesh-manifest.json"
@@ -22,8 +23,6 @@ FORMAT_VERSION = 1
 
 
 def tool_version() -> str:
-    from cgamesh import __version__
-
     return f"cgamesh {__version__}"
 
 
