@@ -7,8 +7,10 @@ navis' neurons, at 8 vertices around and 3 extra rings between nodes. pyvista's 
 ``Spline`` (the same rings per node) + ``tube``, and its plain polyline ``tube`` at one ring
 per node; both read the same chains (cgamesh's reader) and write a GLB with trimesh. Printed:
 time ratios, the per-surface overhead of the batched pass, and peak memory against the bytes
-of the mesh arrays written (whole process, and above a bare python + numpy process's peak). Results are checked (vertex counts, finite arrays); times are
-printed, never asserted. The big-tube figures: ``python benchmarks/bench_tubes.py``.
+of the mesh arrays written (whole process, and above a bare python + numpy process's peak), beside
+the command's own floor: its peak on the smallest input of the same format (a 2-node tree, one
+2-point streamline), which no output can go below. Results are checked (vertex counts, finite
+arrays); times are printed, never asserted. The big-tube figures: ``python benchmarks/bench_tubes.py``.
 ``--overhead-only`` runs just the per-surface overhead (in this process: wall and CPU time,
 best of ``--repeat``, with the load average), the quick check of the batched pass's fixed and
 per-surface costs.
@@ -119,6 +121,36 @@ def baseline_memory() -> float:
     return run_child(BASELINE_CHILD, [])[2]
 
 
+# The smallest input of each format the cases read, and how the memory line names it.
+SMALLEST = {".swc": "a 2-node tree", ".trk": "one 2-point streamline", ".npz": "one 2-point streamline"}
+
+
+def smallest_input(suffix: str, folder: Path, radius: float) -> Path:
+    """A file of the format ``suffix`` holding the least the command meshes: two nodes (an SWC
+    soma and one child) or one streamline of two points, a few radii apart."""
+    points = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 8.0 * radius]])
+    path = folder / f"smallest{suffix}"
+    if suffix == ".swc":
+        path.write_text(f"1 1 0 0 0 {radius} -1\n2 3 0 0 {8.0 * radius} {radius} 1\n")
+    elif suffix == ".npz":
+        np.savez(path, points=points, offsets=np.array([0, 2]))
+    elif suffix == ".trk":
+        from nibabel.streamlines import Tractogram, save
+
+        save(Tractogram([points.astype(np.float32)], affine_to_rasmm=np.eye(4)), str(path))
+    else:
+        raise ValueError(f"no smallest input for {suffix}")
+    return path
+
+
+def command_floor(suffix: str, folder: Path, radius: float) -> float:
+    """Peak resident MB of the command (the same child as every case) on the smallest input of
+    one format: the interpreter, numpy, the command's own modules and its reader's, resident
+    before it reads a node, which every run on that format holds, whatever it writes."""
+    path = smallest_input(suffix, folder, radius)
+    return run_child(CGAMESH_CHILD, [str(path), str(folder / f"smallest{suffix}.glb"), str(radius)])[2]
+
+
 def glb_vertices(path: Path) -> int:
     """Vertex count of a GLB from its JSON chunk alone (the parent stays small: a child's
     rusage would otherwise include the pages of the parent it was forked from)."""
@@ -147,8 +179,12 @@ def repeated_tractogram(source: Path, copies: int, folder: Path) -> Path:
     return path
 
 
-def case(name: str, path: Path, radius: float, repeat: int, folder: Path, baseline: float) -> dict:
-    """Interleaved runs of cgamesh, pyvista Spline+tube and pyvista tube; best wall and CPU times."""
+def case(name: str, path: Path, radius: float, repeat: int, folder: Path, baseline: float, floors: dict) -> dict:
+    """Interleaved runs of cgamesh, pyvista Spline+tube and pyvista tube; best wall and CPU times.
+    ``floors``: the command's floor by file suffix, measured on first use."""
+    if path.suffix not in floors:
+        floors[path.suffix] = command_floor(path.suffix, folder, radius)
+    floor = floors[path.suffix]
     wall = {"cgamesh": np.inf, "spline": np.inf, "tube": np.inf}
     cpu = dict(wall)
     memory = {key: 0.0 for key in wall}
@@ -176,7 +212,8 @@ def case(name: str, path: Path, radius: float, repeat: int, folder: Path, baseli
     print(f"{'':>14}  peak memory cgamesh {memory['cgamesh']:.0f} MB for {written:.1f} MB written "
           f"({memory['cgamesh'] / written:.1f}x, target <= 3x; {(memory['cgamesh'] - baseline) / written:.1f}x "
           f"above the {baseline:.0f} MB of a bare python + numpy, which is {baseline / memory['cgamesh']:.0%} of "
-          f"the peak); pyvista Spline+tube {memory['spline']:.0f} MB")
+          f"the peak; the command on {SMALLEST[path.suffix]} peaks at {floor:.1f} MB, which is "
+          f"{floor / written:.1f}x of this output); pyvista Spline+tube {memory['spline']:.0f} MB")
     return wall
 
 
@@ -222,13 +259,13 @@ def main(argv: list[str] | None = None) -> None:
     repeat = 1 if args.tiny else args.repeat
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        baseline = baseline_memory()
-        case("fornix", fornix(), 0.5, repeat, folder, baseline)
+        baseline, floors = baseline_memory(), {}
+        case("fornix", fornix(), 0.5, repeat, folder, baseline, floors)
         if args.copies > 1:
             case(f"fornix x{args.copies}", repeated_tractogram(fornix(), args.copies, folder), 0.5, repeat, folder,
-                 baseline)
+                 baseline, floors)
         for path in sorted(neurons(), key=lambda p: p.stat().st_size)[: args.neurons]:
-            case(path.stem, path, 40.0, repeat, folder, baseline)
+            case(path.stem, path, 40.0, repeat, folder, baseline, floors)
     per_surface_overhead([10, 100] if args.tiny else [100, 1000, 10000], repeat)
     print("big-tube figures: python benchmarks/bench_tubes.py")
 

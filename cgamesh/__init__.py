@@ -17,6 +17,12 @@ if TYPE_CHECKING:
 
 __all__ = ["Meshes", "batch", "load", "tubes"]
 
+# The one place the version is written (pyproject.toml reads it from here): a GLB records it
+# in its generator string on every write, and importlib.metadata, which would find it in the
+# installed distribution, costs a GLB run about 2 MB resident (email, socket, csv) and a read
+# of the distribution's metadata.
+__version__ = "0.1.0"
+
 
 def __getattr__(name: str):
     if name == "batch":

@@ -18,6 +18,7 @@ from __future__ import annotations
 import importlib
 import sys
 
+from cgamesh import __version__
 from cgamesh.errors import CgameshError
 
 EXIT_USER_ERROR = 2
@@ -45,7 +46,7 @@ def main(argv: list[str] | None = None) -> int:
 def _main(argv: list[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv == ["--version"]:
-        print(f"cgamesh {_version()}")
+        print(f"cgamesh {__version__}")
         return 0
     name = argv[0] if argv and argv[0] in SUBCOMMANDS else None
     module = importlib.import_module(f"cgamesh_cli.{SUBCOMMANDS[name]}" if name else "cgamesh_cli.build")
@@ -73,15 +74,6 @@ def _refuse_usage(prog: str):
         raise _UsageError(f"{message} (see {prog} --help)")
 
     return refuse
-
-
-def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("cgamesh")
-    except PackageNotFoundError:  # run from a source tree that is not installed
-        return "unknown"
 
 
 if __name__ == "__main__":

@@ -241,6 +241,9 @@ def test_benchmark_runs_at_tiny_size():
                              "--neurons", "1"], capture_output=True, text=True, timeout=900)
     assert result.returncode == 0, result.stderr[-2000:]
     assert "Spline+tube" in result.stdout and "CPU" in result.stdout and "per-surface overhead" in result.stdout
+    # the command's floor is measured, on the smallest input of each format the run reads
+    assert "the command on a 2-node tree peaks at" in result.stdout
+    assert "the command on one 2-point streamline peaks at" in result.stdout
 
 
 @pytest.mark.parametrize("split", [False, True])

@@ -15,6 +15,7 @@ import os
 from collections.abc import Mapping
 from pathlib import Path
 
+from cgamesh import __version__
 from cgamesh.errors import InvalidInputError
 
 MANIFEST_NAME = "cgamesh-manifest.json"
@@ -22,12 +23,7 @@ FORMAT_VERSION = 1
 
 
 def tool_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return f"cgamesh {version('cgamesh')}"
-    except PackageNotFoundError:
-        return "cgamesh (not installed)"
+    return f"cgamesh {__version__}"
 
 
 def normalised(options: Mapping) -> dict:

@@ -46,12 +46,12 @@ import os
 import struct
 from collections.abc import Sequence
 from dataclasses import dataclass
-from importlib import metadata
 from pathlib import Path
 from urllib.parse import quote
 
 import numpy as np
 
+from cgamesh import __version__
 from cgamesh.errors import ExportError
 from cgamesh.export.atomic import atomic_files, atomic_write
 from cgamesh.export.checks import (FLOAT32_MAX, check_arguments, check_channels, check_material, check_shapes,
@@ -162,7 +162,7 @@ def build_document(path, surfaces, *, up, meters_per_unit, source_units, tangent
 
     doc = _Document(
         asset={"extras": {"source_units": source_units, "meters_per_unit": scale, "source_up": up},
-               "generator": f"cgamesh {_version()}", "version": "2.0"},
+               "generator": f"cgamesh {__version__}", "version": "2.0"},
         scenes=[{"nodes": list(range(len(surfaces)))}],
     )
     if quantize:
@@ -564,10 +564,3 @@ def _json_bytes(path, doc: _Document) -> bytes:
 
 def _pad4(n: int) -> int:
     return (n + 3) & ~3
-
-
-def _version() -> str:
-    try:
-        return metadata.version("cgamesh")
-    except metadata.PackageNotFoundError:  # running from a source tree that was not installed
-        return "unknown"

@@ -68,7 +68,8 @@ def _bilinear_map(kind: str, grades_a: tuple, grades_b: tuple, grades_out: tuple
     blades_b = np.flatnonzero(_mask(grades_b))
     result = PRODUCT_INDEX[np.ix_(blades_a, blades_b)]
     sign = signs[np.ix_(blades_a, blades_b)] * _mask(grades_out)[result]
-    blades_out = np.unique(result[sign != 0.0])
+    # the blades present, ascending (np.unique would import numpy.ma, 1.3 MB resident, to look for a mask)
+    blades_out = np.flatnonzero(np.bincount(result[sign != 0.0], minlength=BLADE_COUNT))
     column = np.searchsorted(blades_out, result)
     matrix = np.zeros((blades_a.size * blades_b.size, max(blades_out.size, 1)))
     rows = np.arange(matrix.shape[0])

@@ -114,7 +114,8 @@ def _padded_rows(first: np.ndarray, count: np.ndarray):
     """Per-chain rows for row-wise numpy reductions, grouped by length class so
     padding stays under 2x: yields (chains, local index grid (c, L) or -1, rows (c, L))."""
     lengths_class = np.ceil(np.log2(np.maximum(count, 1))).astype(np.int64)
-    for cls in np.unique(lengths_class):
+    # the classes present, ascending: np.unique would import numpy.ma (1.3 MB resident) to look for a mask
+    for cls in np.flatnonzero(np.bincount(lengths_class)):
         members = np.flatnonzero(lengths_class == cls)
         width = int(count[members].max())
         grid = first[members][:, None] + np.arange(width)[None, :]
@@ -218,7 +219,7 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
         length[members] = last
         travelled_rows = cumulative
         # uv.mean_along: numpy's pairwise sum depends on the row's length, so rows of one length at a time
-        for width in np.unique(along[members]):
+        for width in np.flatnonzero(np.bincount(along[members])):  # the lengths present, ascending
             same = np.flatnonzero(along[members] == width)
             rows = grid[same, :width]
             c = ring_circ[rows]
