@@ -33,9 +33,10 @@ UP_AXES = ("x", "y", "z")
 COLOR_MODES = ("none", "radius", "direction", "segment")  # or the name of a per-point scalar
 SOMA = 1  # SWC structure type
 SOMA_SEGMENT = -1.0  # the ``segment`` attribute of soma spheres
-# Spheres meshed at a time when they are merged (45 vertices each at 8 around: about 1.7 MB
-# with their attributes, where a neuron's 600 junctions at once took 4 MB on top of the merged mesh).
-SPHERE_BLOCK = 256
+# Sphere vertices meshed at a time when they are merged (182 spheres of 45 vertices at 8 around:
+# about 1.2 MB with their attributes, where a neuron's 600 junctions at once took 4 MB on top of
+# the merged mesh; under a tolerance a sphere can have tens of thousands).
+SPHERE_BLOCK_VERTICES = 1 << 13
 
 
 @dataclass(frozen=True)
@@ -154,6 +155,8 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     chains, junctions = _chains(lines)
     _check_scale(lines, points, chains)
     soma = lines.kinds == SOMA if lines.kinds is not None else np.zeros(len(points), dtype=bool)
+    if options.tolerance is not None:  # refused before any tube is meshed, not after
+        _check_sphere_resolution(lines, radii, junctions, soma, options)
     tangents = np.zeros_like(points)
     tangents[:, 2] = 1.0
     segment_of = np.full(len(points), SOMA_SEGMENT)
@@ -192,9 +195,9 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
         for one in piece if isinstance(piece, list) else [] if piece is None else [piece]:
             sink(one)
         progress(chain.label)
-    # merged, the spheres go in SPHERE_BLOCK at a time: consecutive pieces of one group merge to its mesh
+    # merged, the spheres go in blocks of SPHERE_BLOCK_VERTICES: consecutive pieces of one group merge to its mesh
     for sphere in _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem,
-                           block=SPHERE_BLOCK if merging else None):
+                           block=SPHERE_BLOCK_VERTICES if merging else None):
         sink(sphere)
     if (merged.empty if merging else not pieces):
         raise DegenerateGeometryError(f"{lines.source}: nothing to mesh: "
@@ -482,41 +485,90 @@ def _node_parameter(mesh: SurfaceMesh, count: int, options: TubeOptions, p: np.n
 
 def _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem,
              block: int | None = None) -> list[SurfaceMesh]:
-    """The junction spheres (one mesh) and the soma spheres (one mesh), those that exist.
+    """The junction spheres and the soma spheres, those that exist: one mesh per group and count
+    around (one count at a fixed resolution; per sphere under a tolerance, ``spheres_around``),
+    its spheres in node order.
 
-    ``block``: each group as meshes of at most that many spheres, in node order (what a merge
-    makes of them is the group's mesh: every sphere's vertices and values are its own), so a
-    run that merges them never holds one group's whole mesh beside the merged one."""
-    from cgamesh.meshing.junctions import uv_spheres
+    ``block``: the meshes of at most that many vertices (at least one sphere), so a run that
+    merges them never holds one group's whole mesh beside the merged one (what a merge makes of
+    consecutive blocks is the group's mesh: every sphere's vertices and values are its own)."""
+    from cgamesh.meshing.junctions import sphere_bands
 
     meshes = []
-    groups = [("junctions", junctions[~soma[junctions]]), ("soma", np.flatnonzero(soma))]
-    if block is not None:
-        groups = [(name, nodes[start:start + block]) for name, nodes in groups
-                  for start in range(0, len(nodes), block)]
-    for name, nodes in groups:
+    for name, nodes in (("junctions", junctions[~soma[junctions]]), ("soma", np.flatnonzero(soma))):
         if not len(nodes):
             continue
-        scale = 1.0
-        if options.watertight and name == "junctions":
-            from cgamesh.meshing.frusta import enclosing_sphere_scale
-
-            scale = enclosing_sphere_scale(options.around)  # the tubes' rings there lie strictly inside
-        mesh = uv_spheres(points[nodes], radii[nodes] * scale, options.around, name=f"{stem}_{name}")
-        per = mesh.vertex_count // len(nodes)
-        attributes = {"radius": np.repeat(radii[nodes], per), "segment": np.repeat(segment_of[nodes], per)}
-        if name == "soma":
-            attributes["segment"][:] = SOMA_SEGMENT
-        if scalar is not None:
-            attributes["scalar"] = np.repeat(scalar[nodes], per)
-        colors = None
-        if options.color_by == "direction":
-            from cgamesh.meshing.colors import direction_colors
-
-            colors = direction_colors(np.repeat(tangents[nodes], per, axis=0))
-        mesh = _with(mesh, attributes=attributes, colors=colors)
-        meshes.extend(_split_spheres(mesh, len(nodes)) if options.watertight else [mesh])
+        sphere_radii = radii[nodes] * (_junction_scale(options) if name == "junctions" else 1.0)
+        around = (np.full(len(nodes), options.around) if options.tolerance is None
+                  else spheres_around(sphere_radii, options.tolerance))
+        for count in np.unique(around):
+            chosen = np.flatnonzero(around == count)
+            per_sphere = (count + 1) * (sphere_bands(int(count)) + 1)
+            step = len(chosen) if block is None else max(1, block // per_sphere)
+            for start in range(0, len(chosen), step):
+                part = chosen[start:start + step]
+                mesh = _sphere_mesh(name, nodes[part], sphere_radii[part], int(count), points, radii, scalar,
+                                    tangents, segment_of, options, stem)
+                meshes.extend(_split_spheres(mesh, len(part)) if options.watertight else [mesh])
     return meshes
+
+
+def _sphere_mesh(name, group, sphere_radii, around, points, radii, scalar, tangents, segment_of, options,
+                 stem) -> SurfaceMesh:
+    """UV spheres of ``around`` at the nodes ``group`` with their attributes and colours."""
+    from cgamesh.meshing.junctions import uv_spheres
+
+    mesh = uv_spheres(points[group], sphere_radii, around, name=f"{stem}_{name}")
+    per = mesh.vertex_count // len(group)
+    attributes = {"radius": np.repeat(radii[group], per), "segment": np.repeat(segment_of[group], per)}
+    if name == "soma":
+        attributes["segment"][:] = SOMA_SEGMENT
+    if scalar is not None:
+        attributes["scalar"] = np.repeat(scalar[group], per)
+    colors = None
+    if options.color_by == "direction":
+        from cgamesh.meshing.colors import direction_colors
+
+        colors = direction_colors(np.repeat(tangents[group], per, axis=0))
+    return _with(mesh, attributes=attributes, colors=colors)
+
+
+def _check_sphere_resolution(lines: Centerlines, radii: np.ndarray, junctions: np.ndarray, soma: np.ndarray,
+                             options: TubeOptions) -> None:
+    """A located InvalidInputError when a junction or soma sphere cannot be meshed to the tolerance."""
+    largest = max([radii[junctions[~soma[junctions]]].max(initial=0.0) * _junction_scale(options),
+                   radii[soma].max(initial=0.0)])
+    if largest > 0.0:
+        try:
+            spheres_around(np.array([largest]), options.tolerance)
+        except InvalidInputError as error:
+            raise InvalidInputError(f"{lines.source}: {error}") from None
+
+
+def _junction_scale(options: TubeOptions) -> float:
+    """The junction spheres' radius over their node's: watertight, they enclose the tubes' rings."""
+    if not options.watertight:
+        return 1.0
+    from cgamesh.meshing.frusta import enclosing_sphere_scale
+
+    return enclosing_sphere_scale(options.around)  # the tubes' rings there lie strictly inside
+
+
+def spheres_around(radii: np.ndarray, tolerance: float) -> np.ndarray:
+    """Per sphere the fewest vertices around whose UV sphere lies within ``tolerance`` of it
+    (cgamesh.meshing.junctions.around_within), from one table of the bound over the counts up to
+    the largest sphere's. InvalidInputError when a sphere needs more than MAX_TABLE_AROUND."""
+    from cgamesh.meshing.junctions import MAX_TABLE_AROUND, around_within, deviation_bound
+
+    try:
+        largest = around_within(float(radii.max()), tolerance, limit=MAX_TABLE_AROUND)
+    except ValueError as error:
+        raise InvalidInputError(f"tolerance {tolerance:g} is too small for the junction and soma spheres: "
+                                f"{error}") from None
+    counts = np.arange(4, largest + 1)
+    # the least bound up to each count: the fewest count meeting a bound is where this first does
+    least = np.minimum.accumulate([deviation_bound(int(m)) for m in counts])
+    return counts[np.searchsorted(-least, -tolerance / radii)]
 
 
 def _assemble(pieces: list[SurfaceMesh], options: TubeOptions, stem: str) -> list[SurfaceMesh]:
