@@ -1,17 +1,22 @@
-"""Junction and soma spheres under a tolerance: each sphere gets the fewest vertices around
-whose mesh stays within the tolerance of it (cgamesh.meshing.junctions.deviation_bound), and a
-real-data tolerance run meshes them so."""
+"""Centreline inputs under a tolerance: each junction and soma sphere gets the fewest vertices
+around whose mesh stays within the tolerance of it (cgamesh.meshing.junctions.deviation_bound),
+and the whole run is priced against the memory budget before any mesh is made, a refusal naming
+about the tolerance that would fit."""
 
 from __future__ import annotations
 
 import os
+import re
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines, spheres_around
+import cgamesh.pipeline
+from cgamesh.budget import ResourceLimitError
+from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+from cgamesh.centerline_tolerance import spheres_around
 from cgamesh.errors import InvalidInputError
 from cgamesh.inputs.centerlines import read_centerlines
 from cgamesh.meshing.junctions import around_within, deviation_bound, uv_spheres
@@ -90,3 +95,43 @@ def test_a_tolerance_too_small_for_a_sphere_is_refused_before_meshing(tmp_path):
     with pytest.raises(InvalidInputError, match=r"tree\.swc: tolerance 1e-09 is too small for the junction and "
                                                 r"soma spheres: a sphere of radius 5 needs more than 4096"):
         mesh_centerlines(read_centerlines(str(source)), TubeOptions(tolerance=1e-9))
+
+
+def test_a_tolerance_run_over_the_budget_is_refused_before_any_mesh_with_a_tolerance_that_fits(tmp_path,
+                                                                                                 monkeypatch):
+    source = tmp_path / "tree.swc"
+    source.write_text(TREE)
+    lines = read_centerlines(str(source))
+
+    def no_mesh(*args, **kwargs):
+        raise AssertionError("a mesh was made before the run was priced")
+
+    with monkeypatch.context() as patch:
+        patch.setattr(cgamesh.pipeline, "mesh_planned", no_mesh)
+        with pytest.raises(ResourceLimitError) as refusal:
+            mesh_centerlines(lines, TubeOptions(tolerance=1e-4), max_memory="40M", outputs=["tree.glb"])
+    message = str(refusal.value)
+    assert message.startswith(f"{source} with tolerance 0.0001 asks for ")
+    assert "the limit is 40 MiB (--max-memory)" in message
+    fitting = float(re.search(r"a tolerance of about ([0-9.e+-]+) would fit$", message).group(1))
+    assert 1e-4 < fitting < 1e-2
+    built = mesh_centerlines(lines, TubeOptions(tolerance=fitting), max_memory="40M", outputs=["tree.glb"])
+    assert sum(mesh.vertex_count for mesh in built.meshes) > 0
+
+
+def test_a_tolerance_run_far_over_the_budget_is_refused_early(tmp_path):
+    """Priced as its chains are planned: refused once the chains so far exceed the budget, the
+    rest extrapolated from them, before the remaining chains are planned."""
+    source = tmp_path / "chains.swc"
+    rows, node = [], 1
+    for chain in range(40):  # 40 chains of 6 nodes, each its own root
+        for k in range(6):
+            rows.append(f"{node} 3 {10.0 * k} {3.0 * chain} 0 1 {-1 if k == 0 else node - 1}")
+            node += 1
+    source.write_text("\n".join(rows) + "\n")
+    labels = []
+    with pytest.raises(ResourceLimitError, match=r"extrapolated from the first \d+ tubes planned\); the limit is "
+                                                  r"40 MiB \(--max-memory\); a tolerance of about .* would fit"):
+        mesh_centerlines(read_centerlines(str(source)), TubeOptions(tolerance=1e-5), max_memory="40M",
+                         progress=lambda label, count=1: labels.append(label))
+    assert 0 < len(labels) < 40
