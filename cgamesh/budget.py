@@ -140,12 +140,15 @@ class Budget:
     def allows(self, size: float) -> bool:
         return size <= max(self.limit, FIXED_OVERHEAD)
 
-    def require(self, size: float, where: str, what: str) -> None:
+    def require(self, size: float, where: str, what: str, advice=None) -> None:
         """Refuse (ResourceLimitError) when ``size`` bytes exceed the limit. The message reads
-        ``{where} asks for {size} of {what}; the limit is {limit} ({knob})``."""
+        ``{where} asks for {size} of {what}; the limit is {limit} ({knob})``, then
+        ``; {advice(limit)}`` when ``advice`` (what would fit, from the limit) gives one."""
         if not self.allows(size):
+            hint = advice(max(self.limit, FIXED_OVERHEAD)) if advice is not None else None
             raise ResourceLimitError(f"{where} asks for {format_size(size)} of {what}; "
-                                     f"the limit is {format_size(self.limit)} ({self.knob})")
+                                     f"the limit is {format_size(self.limit)} ({self.knob})"
+                                     + (f"; {hint}" if hint else ""))
 
     def items(self, size_each: float, where: str, what: str, most: int) -> int:
         """How many items of ``size_each`` bytes fit at once (at most ``most``, at least 1): the

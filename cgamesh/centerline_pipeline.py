@@ -17,7 +17,7 @@ tube, and colours computed from them (cgamesh.meshing.colors).
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -33,9 +33,10 @@ UP_AXES = ("x", "y", "z")
 COLOR_MODES = ("none", "radius", "direction", "segment")  # or the name of a per-point scalar
 SOMA = 1  # SWC structure type
 SOMA_SEGMENT = -1.0  # the ``segment`` attribute of soma spheres
-# Spheres meshed at a time when they are merged (45 vertices each at 8 around: about 1.7 MB
-# with their attributes, where a neuron's 600 junctions at once took 4 MB on top of the merged mesh).
-SPHERE_BLOCK = 256
+# Sphere vertices meshed at a time when they are merged (182 spheres of 45 vertices at 8 around:
+# about 1.2 MB with their attributes, where a neuron's 600 junctions at once took 4 MB on top of
+# the merged mesh; under a tolerance a sphere can have tens of thousands).
+SPHERE_BLOCK_VERTICES = 1 << 13
 
 
 @dataclass(frozen=True)
@@ -136,10 +137,16 @@ class _ChainList:
 
 def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
                      progress: Callable[..., None] = lambda label, count=1: None,
-                     batched: bool = True, as_written: bool = False) -> TubeMeshes:
+                     batched: bool = True, as_written: bool = False, max_memory=None,
+                     outputs: Sequence[str] = ()) -> TubeMeshes:
     """Tubes along every chain of ``lines`` with their junction and soma spheres (see the module).
 
-    ``progress(label, count)`` after every ``count`` chains. ``batched``: mesh the chains in
+    ``progress(label, count)`` after every ``count`` chains (under a tolerance twice per chain:
+    planned, then meshed). Under a tolerance every chain is planned first and the whole run
+    priced against ``max_memory`` (bytes, a size such as "2G", a cgamesh.budget.Budget, or None
+    for the default) with the largest export of ``outputs`` (file names or extensions):
+    ResourceLimitError, naming about the tolerance that would fit, before any mesh is made.
+    ``batched``: mesh the chains in
     one vectorised pass (cgamesh.meshing.batch_pass; same meshes within 1e-12 relative) where
     the options allow it (a fixed resolution, no caps, not watertight); else, or when False,
     one chain at a time. ``as_written``: a merged mesh holds its normals, colours and the
@@ -154,17 +161,32 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     chains, junctions = _chains(lines)
     _check_scale(lines, points, chains)
     soma = lines.kinds == SOMA if lines.kinds is not None else np.zeros(len(points), dtype=bool)
+    if options.tolerance is not None:  # refused before any tube is meshed, not after
+        from cgamesh import centerline_tolerance as to_tolerance
+
+        to_tolerance.check_sphere_resolution(lines, radii, junctions, soma, options)
     tangents = np.zeros_like(points)
     tangents[:, 2] = 1.0
     segment_of = np.full(len(points), SOMA_SEGMENT)
     skipped: list[str] = []
     stem = _mesh_name(lines.source)
+    planned = None
+    if options.tolerance is not None:  # every chain planned, the whole run priced, then meshed
+        price = to_tolerance.TolerancePrice(lines, options.tolerance, max_memory, outputs)
+        planned = to_tolerance.plan_tubes(chains, points, radii, soma, tangents, segment_of, lines, options, stem,
+                                          skipped, progress, price)
+        sphere_vertices, sphere_triangles = to_tolerance.sphere_size(radii, junctions, soma, options)
+        price.finish(sphere_vertices)
     merging = not options.split and not options.watertight
     pieces: list[SurfaceMesh] = []
     if merging:  # each piece goes into the merged arrays as it is made (cgamesh.meshing.merge)
         from cgamesh.meshing.merge import MergedMesh
 
-        vertices, triangles = _expected_size(chains, junctions, soma, options)
+        if planned is None:
+            vertices, triangles = _expected_size(chains, junctions, soma, options)
+        else:  # an upper estimate: the pages of the arrays never filled are never made resident
+            vertices, triangles = to_tolerance.planned_size(planned, options)
+            vertices, triangles = vertices + sphere_vertices, triangles + sphere_triangles
         exact = () if options.color_by in ("none", "direction") else ("radius", "segment", "scalar")
         merged = MergedMesh(vertices, triangles, as_written=as_written, exact_attributes=exact)
         sink = merged.append
@@ -179,6 +201,9 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
         skipped = tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, options, stem,
                               _label_name, single, progress, sink)
         chains_loop = []
+    elif planned is not None:
+        to_tolerance.mesh_planned_tubes(planned, scalar, options, stem, skipped, progress, sink)
+        chains_loop = []
     else:
         chains_loop = chains
     for index, chain in enumerate(chains_loop):
@@ -192,9 +217,9 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
         for one in piece if isinstance(piece, list) else [] if piece is None else [piece]:
             sink(one)
         progress(chain.label)
-    # merged, the spheres go in SPHERE_BLOCK at a time: consecutive pieces of one group merge to its mesh
+    # merged, the spheres go in blocks of SPHERE_BLOCK_VERTICES: consecutive pieces of one group merge to its mesh
     for sphere in _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem,
-                           block=SPHERE_BLOCK if merging else None):
+                           block=SPHERE_BLOCK_VERTICES if merging else None):
         sink(sphere)
     if (merged.empty if merging else not pieces):
         raise DegenerateGeometryError(f"{lines.source}: nothing to mesh: "
@@ -301,11 +326,33 @@ def _chains(lines: Centerlines) -> tuple[_ChainList, np.ndarray]:
             np.zeros(0, dtype=np.int64))
 
 
+@dataclass(frozen=True)
+class _TubeSpec:
+    """One chain's tube as a surface spec, with the nodes and ring normals its attributes need."""
+
+    spec: object  # cgamesh.inputs.scene.SurfaceSpec
+    nodes: np.ndarray
+    p: np.ndarray
+    tube_radii: np.ndarray
+    t: np.ndarray
+
+
 def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segment_of, lines: Centerlines,
-          options: TubeOptions, stem: str) -> SurfaceMesh | None:
+          options: TubeOptions, stem: str) -> SurfaceMesh | list[SurfaceMesh] | None:
     """The tube of one chain with its attributes; None for a chain inside the soma alone."""
-    from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
     from cgamesh.pipeline import Resolution, mesh_surface
+
+    tube = _tube_spec(chain, index, points, radii, soma, tangents, segment_of, lines, options, stem)
+    if tube is None:
+        return None
+    return _tube_finish(tube, mesh_surface(tube.spec, Resolution()), chain, index, scalar, options, stem)
+
+
+def _tube_spec(chain: _Chain, index: int, points, radii, soma, tangents, segment_of, lines: Centerlines,
+               options: TubeOptions, stem: str) -> _TubeSpec | None:
+    """The surface spec of one chain's tube (its junction tangents and segments noted in
+    ``tangents`` and ``segment_of``); None for a chain inside the soma alone."""
+    from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
 
     nodes = chain.nodes
     tube_radii = radii[nodes]
@@ -340,7 +387,14 @@ def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segm
         closed=False, align=True, controls=controls, around=options.around if fixed else None,
         along=along if fixed else None, tolerance=options.tolerance, caps=options.watertight or options.caps,
         material=Material(), location=where, interpolation="motor")
-    mesh = mesh_surface(spec, Resolution())
+    return _TubeSpec(spec, nodes, p, tube_radii, t)
+
+
+def _tube_finish(tube: _TubeSpec, mesh: SurfaceMesh, chain: _Chain, index: int, scalar, options: TubeOptions,
+                 stem: str) -> SurfaceMesh | list[SurfaceMesh]:
+    """The chain's mesh checked and given its attributes and colours (or, watertight and
+    folding, its frusta)."""
+    nodes, p, tube_radii, t, where = tube.nodes, tube.p, tube.tube_radii, tube.t, tube.spec.location
     if not (np.isfinite(mesh.positions).all() and np.isfinite(mesh.normals).all()):
         raise DegenerateGeometryError(f"{where}: expected a finite mesh, got non-finite vertices or normals")
     if options.watertight and not (closed_and_oriented(mesh) and rings_in_order(mesh)):
@@ -481,42 +535,65 @@ def _node_parameter(mesh: SurfaceMesh, count: int, options: TubeOptions, p: np.n
 
 
 def _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem,
-             block: int | None = None) -> list[SurfaceMesh]:
-    """The junction spheres (one mesh) and the soma spheres (one mesh), those that exist.
+             block: int | None = None) -> Iterator[SurfaceMesh]:
+    """The junction spheres and the soma spheres, those that exist: one mesh per group and count
+    around (one count at a fixed resolution; per sphere under a tolerance, ``spheres_around``),
+    its spheres in node order.
 
-    ``block``: each group as meshes of at most that many spheres, in node order (what a merge
-    makes of them is the group's mesh: every sphere's vertices and values are its own), so a
-    run that merges them never holds one group's whole mesh beside the merged one."""
-    from cgamesh.meshing.junctions import uv_spheres
+    ``block``: the meshes of at most that many vertices (at least one sphere), made one at a time
+    as they are asked for, so a run that merges them never holds more than one block beside the
+    merged mesh (what a merge makes of consecutive blocks is the group's mesh: every sphere's
+    vertices and values are its own)."""
+    from cgamesh.meshing.junctions import sphere_bands
 
-    meshes = []
-    groups = [("junctions", junctions[~soma[junctions]]), ("soma", np.flatnonzero(soma))]
-    if block is not None:
-        groups = [(name, nodes[start:start + block]) for name, nodes in groups
-                  for start in range(0, len(nodes), block)]
-    for name, nodes in groups:
+    for name, nodes in (("junctions", junctions[~soma[junctions]]), ("soma", np.flatnonzero(soma))):
         if not len(nodes):
             continue
-        scale = 1.0
-        if options.watertight and name == "junctions":
-            from cgamesh.meshing.frusta import enclosing_sphere_scale
+        sphere_radii = radii[nodes] * (_junction_scale(options) if name == "junctions" else 1.0)
+        if options.tolerance is None:
+            around = np.full(len(nodes), options.around)
+        else:
+            from cgamesh.centerline_tolerance import spheres_around
 
-            scale = enclosing_sphere_scale(options.around)  # the tubes' rings there lie strictly inside
-        mesh = uv_spheres(points[nodes], radii[nodes] * scale, options.around, name=f"{stem}_{name}")
-        per = mesh.vertex_count // len(nodes)
-        attributes = {"radius": np.repeat(radii[nodes], per), "segment": np.repeat(segment_of[nodes], per)}
-        if name == "soma":
-            attributes["segment"][:] = SOMA_SEGMENT
-        if scalar is not None:
-            attributes["scalar"] = np.repeat(scalar[nodes], per)
-        colors = None
-        if options.color_by == "direction":
-            from cgamesh.meshing.colors import direction_colors
+            around = spheres_around(sphere_radii, options.tolerance)
+        for count in np.flatnonzero(np.bincount(around)):  # the counts present (np.unique imports numpy.ma)
+            chosen = np.flatnonzero(around == count)
+            per_sphere = (count + 1) * (sphere_bands(int(count)) + 1)
+            step = len(chosen) if block is None else max(1, block // per_sphere)
+            for start in range(0, len(chosen), step):
+                part = chosen[start:start + step]
+                mesh = _sphere_mesh(name, nodes[part], sphere_radii[part], int(count), points, radii, scalar,
+                                    tangents, segment_of, options, stem)
+                yield from _split_spheres(mesh, len(part)) if options.watertight else [mesh]
 
-            colors = direction_colors(np.repeat(tangents[nodes], per, axis=0))
-        mesh = _with(mesh, attributes=attributes, colors=colors)
-        meshes.extend(_split_spheres(mesh, len(nodes)) if options.watertight else [mesh])
-    return meshes
+
+def _sphere_mesh(name, group, sphere_radii, around, points, radii, scalar, tangents, segment_of, options,
+                 stem) -> SurfaceMesh:
+    """UV spheres of ``around`` at the nodes ``group`` with their attributes and colours."""
+    from cgamesh.meshing.junctions import uv_spheres
+
+    mesh = uv_spheres(points[group], sphere_radii, around, name=f"{stem}_{name}")
+    per = mesh.vertex_count // len(group)
+    attributes = {"radius": np.repeat(radii[group], per), "segment": np.repeat(segment_of[group], per)}
+    if name == "soma":
+        attributes["segment"][:] = SOMA_SEGMENT
+    if scalar is not None:
+        attributes["scalar"] = np.repeat(scalar[group], per)
+    colors = None
+    if options.color_by == "direction":
+        from cgamesh.meshing.colors import direction_colors
+
+        colors = direction_colors(np.repeat(tangents[group], per, axis=0))
+    return _with(mesh, attributes=attributes, colors=colors)
+
+
+def _junction_scale(options: TubeOptions) -> float:
+    """The junction spheres' radius over their node's: watertight, they enclose the tubes' rings."""
+    if not options.watertight:
+        return 1.0
+    from cgamesh.meshing.frusta import enclosing_sphere_scale
+
+    return enclosing_sphere_scale(options.around)  # the tubes' rings there lie strictly inside
 
 
 def _assemble(pieces: list[SurfaceMesh], options: TubeOptions, stem: str) -> list[SurfaceMesh]:

@@ -55,8 +55,22 @@ def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
     that needs more is refused with ResourceLimitError before anything is allocated.
     """
     plan = plan_surface(spec, resolution, tangents)
-    costs.Budget.of(max_memory).require(plan.peak, plan.where, plan.what)
+    costs.Budget.of(max_memory).require(plan.peak, plan.where, plan.what, _fitting(plan.tolerance, plan.peak))
     return mesh_planned(plan, tangents)
+
+
+def _fitting(tolerance: float | None, needed: float):
+    """For a refusal of a tolerance run needing ``needed`` bytes: the advice of about the
+    tolerance that would fit a limit (tolerance_budget.fitting_tolerance); None at a fixed resolution."""
+    if tolerance is None:
+        return None
+    from cgamesh.meshing.tolerance_budget import fitting_tolerance
+
+    def advice(limit):
+        fitting = fitting_tolerance(tolerance, needed, limit)
+        return None if fitting is None else f"a tolerance of about {fitting:.2g} would fit"
+
+    return advice
 
 
 @dataclass(frozen=True)
@@ -181,13 +195,15 @@ def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lam
     plans = [plan_surface(spec, resolution, tangents, build=batch is None or not batch.takes(i))
              for i, spec in enumerate(scene.surfaces)]
     for plan in plans:
-        budget.require(plan.peak, plan.where, plan.what)
+        budget.require(plan.peak, plan.where, plan.what, _fitting(plan.tolerance, plan.peak))
     held = sum(plan.held for plan in plans)
     vertices = sum(plan.vertices for plan in plans)
     suffixes = [("." + str(o).rsplit(".", 1)[-1]) if "." in str(o) else str(o) for o in outputs]
     transient = max([plan.peak - plan.held for plan in plans] + [costs.export_bytes(suffixes, vertices, tangents)])
+    # one tolerance for every surface (--tolerance): the whole scene scales with it
+    shared = resolution.tolerance if all(plan.tolerance is not None for plan in plans) else None
     budget.require(held + transient, f"{scene.path}", f"meshes and exports ({len(plans)} surfaces, "
-                   f"about {vertices} vertices)")
+                   f"about {vertices} vertices)", _fitting(shared, held + transient))
     meshes = []
     for i, plan in enumerate(plans):
         mesh = batch.mesh(i) if batch is not None and batch.takes(i) else None

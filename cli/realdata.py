@@ -101,8 +101,11 @@ def run(args: argparse.Namespace) -> str | int:
     # every output a plain glTF file and nothing else reading the mesh: hold it as they store it
     as_written = (all(o.suffix.lower() in (".glb", ".gltf") for o in outputs) and not args.quantize
                   and not args.tangents and not args.report)
-    with Progress(chains, enabled=not args.quiet) as progress:
-        built = mesh_centerlines(lines, options, progress=progress.advance, as_written=as_written)
+    # under a tolerance every chain is planned (and the run priced), then meshed: two steps a chain
+    steps = chains if options.tolerance is None else 2 * chains
+    with Progress(steps, enabled=not args.quiet) as progress:
+        built = mesh_centerlines(lines, options, progress=progress.advance, as_written=as_written,
+                                 max_memory=args.max_memory, outputs=[str(o) for o in outputs])
     surfaces = [(mesh, built.material) for mesh in built.meshes]
     failures = []
     with all_or_nothing():  # every output, sidecar and the report, or none of them

@@ -100,6 +100,17 @@ def test_a_fine_tolerance_beyond_the_budget_is_refused(tmp_path, capsys):
     assert_refused(code, err, "--tolerance 1e-05 asks for", "of meshing to tolerance", "(--max-memory)")
 
 
+def test_a_refused_tolerance_names_about_one_that_fits(tmp_path, capsys):
+    """Vertices grow about as 1 / tolerance: the refusal scales the tolerance to the limit (with a
+    margin), and a run at the tolerance it names fits."""
+    code, _, err = run(capsys, KB, "-o", tmp_path / "out.glb", "--tolerance", "1e-5", "--max-memory", "100M")
+    assert code == 2 and "(--max-memory); a tolerance of about " in err and err.rstrip().endswith("would fit")
+    fitting = err.rstrip().rsplit("a tolerance of about ", 1)[1].split()[0]
+    assert 1e-5 < float(fitting) < 1e-3
+    code, out, err = run(capsys, KB, "-o", tmp_path / "out.glb", "--tolerance", fitting, "--max-memory", "100M")
+    assert code == 0, err
+
+
 SMALL_RIBBON = """cgamesh: 1
 surfaces:
   - name: twist

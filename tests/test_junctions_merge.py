@@ -62,9 +62,9 @@ def test_merge_offsets_faces_and_keeps_colours_and_shared_attributes():
 
 @pytest.mark.parametrize("color_by", ["direction", "radius"])
 def test_spheres_merged_a_block_at_a_time_are_the_spheres_merged_whole(color_by, monkeypatch):
-    """A merged run hands the junction and soma spheres over SPHERE_BLOCK at a time: the merged
-    mesh is the one made from each group's whole mesh, bit for bit (blocks of 7 on a neuron with
-    hundreds of junctions and a soma of twelve nodes, against one block)."""
+    """A merged run hands the junction and soma spheres over in blocks of SPHERE_BLOCK_VERTICES:
+    the merged mesh is the one made from each group's whole mesh, bit for bit (blocks of 7
+    spheres on a neuron with hundreds of junctions and a soma of twelve nodes, against one block)."""
     from dataclasses import replace
 
     import cgamesh.centerline_pipeline as pipeline
@@ -76,9 +76,9 @@ def test_spheres_merged_a_block_at_a_time_are_the_spheres_merged_whole(color_by,
     kinds[:12] = pipeline.SOMA  # a soma of twelve nodes (this neuron's file has none)
     lines = replace(lines, kinds=kinds)
     options = pipeline.TubeOptions(radius=40.0, color_by=color_by)
-    monkeypatch.setattr(pipeline, "SPHERE_BLOCK", 10**9)
+    monkeypatch.setattr(pipeline, "SPHERE_BLOCK_VERTICES", 10**9)
     whole = pipeline.mesh_centerlines(lines, options, as_written=True).meshes[0]
-    monkeypatch.setattr(pipeline, "SPHERE_BLOCK", 7)
+    monkeypatch.setattr(pipeline, "SPHERE_BLOCK_VERTICES", 7 * 45)  # 45 vertices a sphere at 8 around
     blocks = pipeline.mesh_centerlines(lines, options, as_written=True).meshes[0]
     assert np.count_nonzero(lines.kinds == pipeline.SOMA) > 7  # the soma group is split as well
     for channel in ("positions", "normals", "uvs", "faces", "colors"):

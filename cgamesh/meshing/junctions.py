@@ -5,6 +5,13 @@ each such circle lies on the sphere of that radius about the node, so one sphere
 node covers every tube end meeting there, with no notch whatever the angles between them.
 The spheres are UV spheres with exact normals (the unit radial direction) and u around,
 v from pole to pole.
+
+Under a tolerance D each sphere gets the fewest vertices around whose mesh stays within D of
+it (``around_within``). Every triangle has its corners on the sphere, so its plane cuts the
+sphere in the triangle's circumcircle, of radius rho, at distance sqrt(r^2 - rho^2) from the
+centre; every point of the triangle is at least that far from the centre, so within
+r - sqrt(r^2 - rho^2) of the sphere. A UV quad is an isosceles trapezoid, which is cyclic: both
+its triangles have its circumcircle, one per band of latitude (``deviation_bound``).
 """
 
 from __future__ import annotations
@@ -14,9 +21,57 @@ import numpy as np
 from cgamesh.meshing.mesh import SurfaceMesh
 
 
+# The most vertices around a sphere meshed to a tolerance (as the tubes' planner allows), and
+# the most a run's table of bounds (one per count, centerline_pipeline.spheres_around) holds: a
+# sphere of 4,096 around already has 8.4 million vertices.
+MAX_AROUND = 1 << 16
+MAX_TABLE_AROUND = 4096
+
+
 def sphere_bands(around: int) -> int:
     """Latitude bands of a sphere with ``around`` vertices around: its edges about as long both ways."""
     return max(2, around // 2)
+
+
+def deviation_bound(around: int) -> float:
+    """The largest distance from the unit sphere of any point of its UV mesh with ``around``
+    vertices around: max over the bands of 1 - sqrt(1 - rho^2), rho the circumradius of the
+    band's first quad (see the module), written rho^2 / (1 + sqrt(1 - rho^2)) to stay exact
+    for small rho."""
+    bands = sphere_bands(around)
+    phi = np.pi * np.arange(bands + 1) / bands
+    theta = 2.0 * np.pi / around
+    ring = lambda angle: np.stack([np.sin(phi) * np.cos(angle), np.sin(phi) * np.sin(angle),  # noqa: E731
+                                   np.cos(phi)], axis=-1)
+    first, second = ring(0.0), ring(theta)
+    # the triangle (k, 0), (k + 1, 0), (k + 1, 1) of each band: the quad's circumcircle (at a
+    # pole, where the quad is that triangle, the triangle's own)
+    a, b, c = first[:-1], first[1:], second[1:]
+    ab, bc, ca = (np.linalg.norm(x - y, axis=-1) for x, y in ((a, b), (b, c), (c, a)))
+    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=-1)
+    rho_sq = np.minimum((ab * bc * ca / (4.0 * area)) ** 2, 1.0)
+    return float(np.max(rho_sq / (1.0 + np.sqrt(1.0 - rho_sq))))
+
+
+def around_within(radius: float, tolerance: float, limit: int = MAX_AROUND) -> int:
+    """The fewest vertices around (at least 4) whose UV sphere of ``radius`` lies within
+    ``tolerance`` of the sphere, by ``deviation_bound`` (which falls as ``around`` grows);
+    ValueError when more than ``limit`` would be needed."""
+    if radius * deviation_bound(4) <= tolerance:
+        return 4
+    low, high = 4, 8
+    while radius * deviation_bound(high) > tolerance:
+        if high >= limit:
+            raise ValueError(f"a sphere of radius {radius:g} needs more than {limit} vertices around "
+                             f"for a tolerance of {tolerance:g}")
+        low, high = high, min(2 * high, limit)
+    while high - low > 1:  # radius * bound(low) > tolerance >= radius * bound(high)
+        middle = (low + high) // 2
+        if radius * deviation_bound(middle) <= tolerance:
+            high = middle
+        else:
+            low = middle
+    return high
 
 
 def uv_spheres(centres: np.ndarray, radii: np.ndarray, around: int, name: str = "spheres") -> SurfaceMesh:

@@ -30,6 +30,8 @@ TOLERANCE_FLOOR = 1e-7  # of the surface's bounding radius
 FLOAT_SPACING_FACTOR = 64  # float64 spacings (of the largest coordinate) a tolerance must exceed
 RINGS_MARGIN = 1.25  # rings the placement may add over the planned count, at most (measured: a few %)
 RUN_OVERHEAD = 8 * 2**20  # per run, whatever its size: the plan's cells and tables
+# A refusal names a tolerance this much above the one whose price scales to the limit exactly.
+FIT_MARGIN = 1.25
 
 
 @dataclass(frozen=True)
@@ -66,3 +68,13 @@ def estimate(surface: EvolvedSurface, tolerance: float, closed: bool = False) ->
     along = max(2, math.ceil(counts.rings * RINGS_MARGIN))
     _, peak = costs.surface_bytes(kind, counts.around, along)
     return ToleranceCost(counts.around, along, peak + RUN_OVERHEAD, prepared)
+
+
+def fitting_tolerance(tolerance: float, needed: float, limit: float, fixed: float = RUN_OVERHEAD) -> float | None:
+    """About the smallest tolerance whose run fits ``limit`` bytes, from ``tolerance`` whose run
+    needs ``needed``: the bytes beyond ``fixed`` scale with the vertices, which grow about as
+    1 / tolerance (the count around and the rings each as 1 / sqrt(tolerance)); FIT_MARGIN over
+    that. None when not even the fixed part fits."""
+    if limit <= fixed or needed <= fixed:
+        return None
+    return tolerance * (needed - fixed) / (limit - fixed) * FIT_MARGIN

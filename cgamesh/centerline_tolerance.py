@@ -1,0 +1,181 @@
+"""Centreline inputs meshed to a tolerance: every chain planned, the whole run priced, then meshed.
+
+Each chain's tube is planned by the tolerance's a priori bound (cgamesh.meshing.tolerance_plan)
+before any mesh is made, and priced as it is planned (``TolerancePrice``): the merged mesh, the
+largest meshing transient and the largest export against the memory budget, refused as soon as
+the chains so far exceed it, with about the tolerance that would fit. The junction and soma
+spheres get the fewest vertices around that keep them within the tolerance (``spheres_around``,
+cgamesh.meshing.junctions.deviation_bound; docs/tolerance.md, "Junction and soma spheres").
+Then the chains are meshed from their plans, each plan let go once its mesh is made.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from cgamesh.centerline_pipeline import (Centerlines, TubeOptions, _Chain, _junction_scale, _tube_finish,
+                                         _tube_spec, _TubeSpec)
+from cgamesh.errors import CgameshError, InvalidInputError
+
+
+@dataclass
+class PlannedTube:
+    """A chain planned under a tolerance: its tube's spec and the plan priced (SurfacePlan)."""
+
+    chain: _Chain
+    index: int
+    tube: _TubeSpec
+    plan: object
+
+
+def plan_tubes(chains, points, radii, soma, tangents, segment_of, lines, options, stem, skipped,
+                progress, price: "TolerancePrice") -> list[PlannedTube]:
+    """Every chain's tube planned to the tolerance (counts chosen, nothing mesh-sized made), in
+    chain order, each priced as it is planned (``price`` refuses as soon as the run cannot fit);
+    a chain that cannot be planned is skipped (``skipped``), or raises when strict."""
+    from cgamesh.pipeline import Resolution, plan_surface
+
+    planned = []
+    done = np.cumsum(chains.counts)  # nodes planned after each chain
+    for index, chain in enumerate(chains):
+        try:
+            tube = _tube_spec(chain, index, points, radii, soma, tangents, segment_of, lines, options, stem)
+            if tube is not None:
+                planned.append(PlannedTube(chain, index, tube, plan_surface(tube.spec, Resolution())))
+        except CgameshError as error:
+            if options.strict:
+                raise
+            skipped.append(str(error))
+            tube = None
+        if tube is not None:
+            price.add(planned[-1].plan, share=float(done[index] / done[-1]))
+        progress(chain.label)
+    return planned
+
+
+class TolerancePrice:
+    """What a tolerance run of centrelines will hold and allocate, summed as its chains are
+    planned: the merged mesh's bytes, the largest meshing transient of one tube and the largest
+    export of ``outputs``; refused (ResourceLimitError) as soon as it exceeds the budget, with
+    about the tolerance that would fit (cgamesh.meshing.tolerance_budget.fitting_tolerance)."""
+
+    def __init__(self, lines: Centerlines, tolerance: float, max_memory, outputs: Sequence[str]):
+        from cgamesh import budget as costs
+
+        self.budget = costs.Budget.of(max_memory)
+        self.where = f"{lines.source} with tolerance {tolerance:g}"
+        self.tolerance = tolerance
+        self.suffixes = [("." + str(o).rsplit(".", 1)[-1]) if "." in str(o) else str(o) for o in outputs]
+        self.vertices = self.tubes = 0
+        self.transient = 0
+
+    def needed(self, vertices: int) -> int:
+        from cgamesh import budget as costs
+
+        return costs.HELD_PER_VERTEX * vertices + max(self.transient, costs.export_bytes(self.suffixes, vertices))
+
+    def add(self, plan, share: float) -> None:
+        """One more tube planned; ``share``: the fraction of the input's nodes planned so far."""
+        self.vertices += plan.vertices
+        self.tubes += 1
+        self.transient = max(self.transient, plan.peak - plan.held)
+        now = self.needed(self.vertices)
+        if not self.budget.allows(now):
+            whole = self.needed(int(self.vertices / max(share, 1e-12)))  # the rest like the chains so far
+            self._refuse(whole, f"tubes meshed to it (about {int(self.vertices / max(share, 1e-12))} vertices, "
+                                f"extrapolated from the first {self.tubes} tubes planned)")
+
+    def finish(self, sphere_vertices: int) -> None:
+        """The whole run, its spheres with it."""
+        vertices = self.vertices + sphere_vertices
+        self._refuse(self.needed(vertices), f"tubes and spheres meshed to it ({self.tubes} tubes, about "
+                                            f"{vertices} vertices)")
+
+    def _refuse(self, needed: int, what: str) -> None:
+        from cgamesh.meshing.tolerance_budget import fitting_tolerance
+
+        def advice(limit):
+            fitting = fitting_tolerance(self.tolerance, needed, limit)
+            return None if fitting is None else f"a tolerance of about {fitting:.2g} would fit"
+
+        self.budget.require(needed, self.where, what, advice)
+
+
+def mesh_planned_tubes(planned: list[PlannedTube], scalar, options, stem, skipped, progress, sink) -> None:
+    """Mesh the planned tubes in order into ``sink``, each plan let go once its mesh is made."""
+    from cgamesh.pipeline import mesh_planned
+
+    for k, item in enumerate(planned):
+        planned[k] = None  # the plan's cells go with it
+        try:
+            piece = _tube_finish(item.tube, mesh_planned(item.plan, False), item.chain, item.index, scalar,
+                                 options, stem)
+        except CgameshError as error:
+            if options.strict:
+                raise
+            skipped.append(str(error))
+            piece = None
+        for one in piece if isinstance(piece, list) else [] if piece is None else [piece]:
+            sink(one)
+        progress(item.chain.label)
+
+
+def planned_size(planned: list[PlannedTube], options: TubeOptions) -> tuple[int, int]:
+    """Vertices and triangles of the planned tubes, at most (their rings with the placement's margin)."""
+    from cgamesh.meshing.tolerance_budget import RINGS_MARGIN
+
+    vertices = triangles = 0
+    for item in planned:
+        counts = item.plan.prepared.counts
+        rings = int(np.ceil(counts.rings * RINGS_MARGIN))
+        vertices += rings * (counts.around + 1) + (2 * (counts.around + 2) if options.caps else 0)
+        triangles += 2 * counts.around * (rings - 1) + (2 * counts.around if options.caps else 0)
+    return vertices, triangles
+
+
+def sphere_size(radii, junctions, soma, options) -> tuple[int, int]:
+    """Vertices and triangles of the junction and soma spheres at their counts around."""
+    from cgamesh.meshing.junctions import sphere_bands
+
+    sphere_radii = np.concatenate([radii[junctions[~soma[junctions]]] * _junction_scale(options), radii[soma]])
+    if not len(sphere_radii):
+        return 0, 0
+    around = (np.full(len(sphere_radii), options.around) if options.tolerance is None
+              else spheres_around(sphere_radii, options.tolerance))
+    spheres = np.bincount(around)
+    counts = np.flatnonzero(spheres)  # the counts present (np.unique imports numpy.ma)
+    spheres = spheres[counts]
+    bands = np.array([sphere_bands(int(m)) for m in counts])
+    return int(((counts + 1) * (bands + 1) * spheres).sum()), int((2 * counts * (bands - 1) * spheres).sum())
+
+
+def check_sphere_resolution(lines: Centerlines, radii: np.ndarray, junctions: np.ndarray, soma: np.ndarray,
+                             options: TubeOptions) -> None:
+    """A located InvalidInputError when a junction or soma sphere cannot be meshed to the tolerance."""
+    largest = max([radii[junctions[~soma[junctions]]].max(initial=0.0) * _junction_scale(options),
+                   radii[soma].max(initial=0.0)])
+    if largest > 0.0:
+        try:
+            spheres_around(np.array([largest]), options.tolerance)
+        except InvalidInputError as error:
+            raise InvalidInputError(f"{lines.source}: {error}") from None
+
+
+def spheres_around(radii: np.ndarray, tolerance: float) -> np.ndarray:
+    """Per sphere the fewest vertices around whose UV sphere lies within ``tolerance`` of it
+    (cgamesh.meshing.junctions.around_within), from one table of the bound over the counts up to
+    the largest sphere's. InvalidInputError when a sphere needs more than MAX_TABLE_AROUND."""
+    from cgamesh.meshing.junctions import MAX_TABLE_AROUND, around_within, deviation_bound
+
+    try:
+        largest = around_within(float(radii.max()), tolerance, limit=MAX_TABLE_AROUND)
+    except ValueError as error:
+        raise InvalidInputError(f"tolerance {tolerance:g} is too small for the junction and soma spheres: "
+                                f"{error}") from None
+    counts = np.arange(4, largest + 1)
+    # the least bound up to each count: the fewest count meeting a bound is where this first does
+    least = np.minimum.accumulate([deviation_bound(int(m)) for m in counts])
+    return counts[np.searchsorted(-least, -tolerance / radii)]
