@@ -40,7 +40,7 @@ from report_accuracy import smallest_uniform, tolerance_mesh_deviation, uniform_
 from timing import best_of  # noqa: E402
 
 import cgamesh.pipeline as pipeline  # noqa: E402
-from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines  # noqa: E402
+from cgamesh.centerline_pipeline import SOMA, TubeOptions, _chains, mesh_centerlines  # noqa: E402
 from cgamesh.errors import CgameshError  # noqa: E402
 from cgamesh.inputs.centerlines import read_centerlines  # noqa: E402
 from cgamesh.meshing.tolerance_plan import plan_tolerance  # noqa: E402
@@ -55,20 +55,20 @@ def least_time(work, repeats: int = 2):
 
 
 def tube_specs(path: Path, options: TubeOptions) -> list:
-    """The surface of every chain, as the real-data pipeline builds it (caught on its way to the mesher)."""
+    """The surface of every chain, as a tolerance run plans it (caught on its way to the planner)."""
     caught = []
-    real = pipeline.mesh_surface  # the real-data pipeline imports it when it meshes a chain
+    real = pipeline.plan_surface  # the tolerance run imports it when it plans a chain
 
     def catching(spec, resolution=Resolution(), *args, **kwargs):
-        caught.append(spec)  # meshed here coarsely: only the specs are wanted
+        caught.append(spec)  # planned and meshed here coarsely: only the specs are wanted
         coarse = replace(spec, tolerance=None, around=3, along=2 * len(spec.controls))
         return real(coarse, resolution, *args, **kwargs)
 
-    pipeline.mesh_surface = catching
+    pipeline.plan_surface = catching
     try:
         mesh_centerlines(read_centerlines(str(path)), options)
     finally:
-        pipeline.mesh_surface = real
+        pipeline.plan_surface = real
     return caught
 
 
@@ -112,16 +112,90 @@ def compare(name: str, path: Path, radius: float | None, relative: float, chains
           flush=True)
 
 
+def compare_files(name: str, path: Path, radius: float | None, relative: float) -> None:
+    """The whole file as a user meshes it: ``cgamesh FILE --tolerance D`` against the smallest
+    ``--around M --subdivide K`` whose every tube and sphere is within D (one resolution for the
+    whole file, as the command takes it). Spheres: a UV sphere of M around is within D of its
+    sphere when r deviation_bound(M) <= D (cgamesh.meshing.junctions), so M is at least what the
+    largest sphere needs; tubes: each tube's uniform grid measured (cgamesh.meshing.deviation),
+    K the fewest reaching D on every tube, by doubling and bisection, for each M among the
+    tolerance plans' counts around (and the spheres' floor); the fewest vertices win. Times:
+    CPU, one run each of mesh_centerlines (no file written), with one BLAS thread."""
+    from cgamesh.centerline_tolerance import spheres_around
+    from cgamesh.meshing.deviation import CIRCLES, grid_deviation
+
+    lines = read_centerlines(str(path))
+    radii = lines.radii if radius is None else np.full(len(lines.points), radius)
+    tolerance = relative * float(np.median(radii[radii > 0]))
+    tolerance_options = TubeOptions(radius=radius, tolerance=tolerance)
+    start = time.process_time()
+    built = mesh_centerlines(lines, tolerance_options)
+    seconds = time.process_time() - start
+    vertices = sum(mesh.vertex_count for mesh in built.meshes)
+    del built
+    print(f"{name}: whole file, tolerance {tolerance:.3g} ({relative:g} of the median radius): "
+          f"{vertices:,} vertices in {seconds:.1f} s CPU", flush=True)
+
+    specs = tube_specs(path, tolerance_options)
+    surfaces = [build_surface(spec) for spec in specs]
+    chains, junctions = _chains(lines)
+    soma = lines.kinds == SOMA if lines.kinds is not None else np.zeros(len(lines.points), dtype=bool)
+    sphere_radii = np.concatenate([radii[junctions[~soma[junctions]]], radii[soma]])
+    floor = int(spheres_around(sphere_radii, tolerance).max()) if len(sphere_radii) else 3
+    widest = max(max(c.radius for c in spec.controls) for spec in specs)
+    sag = int(np.ceil(np.pi / (2.0 * np.arcsin(np.sqrt(0.5 * tolerance / widest)))))  # r (1 - cos(pi / M)) <= D
+    candidates = sorted({max(floor, int(np.ceil(f * sag))) for f in (1.25, 1.5, 2.0)})
+    order = list(range(len(specs)))  # the tube that failed last is measured first
+
+    def reaches(around: int, subdivide: int) -> bool:
+        for position, k in enumerate(order):
+            segments = surfaces[k].segment_count
+            rings = segments * (subdivide + 1) + 1
+            _, grid, t = uniform_grid(surfaces[k], specs[k], around, rings)
+            if grid_deviation(surfaces[k], t, grid, CIRCLES).max > tolerance:
+                order.insert(0, order.pop(position))
+                return False
+        return True
+
+    best = None
+    for around in candidates:
+        low, high = -1, 1  # reaches(around, low) is False (or low = -1), reaches(around, high) is True
+        while not reaches(around, high):
+            low, high = high, 2 * high + 1
+        while high - low > 1:
+            middle = (low + high) // 2
+            low, high = (low, middle) if middle >= 0 and reaches(around, middle) else (middle, high)
+        options = TubeOptions(radius=radius, around=around, subdivide=high)
+        start = time.process_time()
+        uniform = mesh_centerlines(lines, options)
+        uniform_seconds = time.process_time() - start
+        uniform_vertices = sum(mesh.vertex_count for mesh in uniform.meshes)
+        del uniform
+        print(f"  --around {around} --subdivide {high}: {uniform_vertices:,} vertices in {uniform_seconds:.1f} s CPU",
+              flush=True)
+        if best is None or uniform_vertices < best[2]:
+            best = (around, high, uniform_vertices, uniform_seconds)
+    around, subdivide, uniform_vertices, uniform_seconds = best
+    print(f"  smallest uniform: --around {around} --subdivide {subdivide}; vertices ratio "
+          f"{vertices / uniform_vertices:.2f}, time ratio {seconds / uniform_seconds:.2f}", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--relative", type=float, default=1e-3, help="tolerance / median radius")
     parser.add_argument("--chains", type=int, default=5, help="the first N chains of each file (default 5)")
     parser.add_argument("--whole", action="store_true", help="every chain of each file")
+    parser.add_argument("--files", action="store_true",
+                        help="whole files as the command meshes them, against one uniform resolution (compare_files)")
     args = parser.parse_args()
     chains = None if args.whole else args.chains
     from realdata_files import fornix, smallest_neuron
 
     neuron = smallest_neuron()
+    if args.files:
+        compare_files(f"navis neuron {neuron.stem}", neuron, None, args.relative)
+        compare_files("dipy fornix", fornix(), 0.5, args.relative)
+        return
     compare(f"navis neuron {neuron.stem}", neuron, None, args.relative, chains)
     compare("dipy fornix", fornix(), 0.5, args.relative, chains)
 

@@ -32,7 +32,7 @@ class PlannedTube:
 
 
 def plan_tubes(chains, points, radii, soma, tangents, segment_of, lines, options, stem, skipped,
-                progress, price: "TolerancePrice") -> list[PlannedTube]:
+               progress, price: "TolerancePrice") -> list[PlannedTube]:
     """Every chain's tube planned to the tolerance (counts chosen, nothing mesh-sized made), in
     chain order, each priced as it is planned (``price`` refuses as soon as the run cannot fit);
     a chain that cannot be planned is skipped (``skipped``), or raises when strict."""
@@ -124,28 +124,28 @@ def mesh_planned_tubes(planned: list[PlannedTube], scalar, options, stem, skippe
 
 
 def planned_size(planned: list[PlannedTube], options: TubeOptions) -> tuple[int, int]:
-    """Vertices and triangles of the planned tubes, at most (their rings with the placement's margin)."""
-    from cgamesh.meshing.tolerance_budget import RINGS_MARGIN
+    """Vertices and triangles of the planned tubes, at most: each plan's estimate (with the
+    placement's margin, tolerance_budget.estimate) and its caps; a grid has fewer triangles than
+    twice its vertices."""
+    vertices = sum(item.plan.vertices for item in planned)
+    if options.caps:
+        vertices += sum(2 * (_around(item.plan) + 2) for item in planned)
+    return vertices, 2 * vertices
 
-    vertices = triangles = 0
-    for item in planned:
-        counts = item.plan.prepared.counts
-        rings = int(np.ceil(counts.rings * RINGS_MARGIN))
-        vertices += rings * (counts.around + 1) + (2 * (counts.around + 2) if options.caps else 0)
-        triangles += 2 * counts.around * (rings - 1) + (2 * counts.around if options.caps else 0)
-    return vertices, triangles
+
+def _around(plan) -> int:
+    """A plan's count around: its tolerance's, or its fixed resolution's."""
+    return plan.prepared.counts.around if plan.prepared is not None else plan.around
 
 
 def sphere_size(radii, junctions, soma, options) -> tuple[int, int]:
-    """Vertices and triangles of the junction and soma spheres at their counts around."""
+    """Vertices and triangles of the junction and soma spheres at their counts around for the tolerance."""
     from cgamesh.meshing.junctions import sphere_bands
 
     sphere_radii = np.concatenate([radii[junctions[~soma[junctions]]] * _junction_scale(options), radii[soma]])
     if not len(sphere_radii):
         return 0, 0
-    around = (np.full(len(sphere_radii), options.around) if options.tolerance is None
-              else spheres_around(sphere_radii, options.tolerance))
-    spheres = np.bincount(around)
+    spheres = np.bincount(spheres_around(sphere_radii, options.tolerance))
     counts = np.flatnonzero(spheres)  # the counts present (np.unique imports numpy.ma)
     spheres = spheres[counts]
     bands = np.array([sphere_bands(int(m)) for m in counts])
