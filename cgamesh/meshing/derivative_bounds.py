@@ -58,6 +58,13 @@ class CellDerivatives:
     second: np.ndarray
     second_radius: np.ndarray
 
+    def columns(self, start: int, stop: int) -> CellDerivatives:
+        """The bounds of components start..stop-1 alone: every bound is taken component by
+        component, so one call on stacked members gives each member's own bounds, bit for bit."""
+        pick = slice(start, stop)
+        return CellDerivatives(self.value[..., pick], self.first[..., pick], self.first_radius[..., pick],
+                               self.second[..., pick], self.second_radius[..., pick])
+
     def norms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Upper bounds (segments, S) of |f|, |f'| and |f''| (Euclidean norms) over each cell."""
         return (lengths(self.value), lengths(np.abs(self.first) + self.first_radius),

@@ -42,7 +42,7 @@ from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
 from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.meshing.circles import transported_frames
 from cgamesh.meshing.dense_transport import transported_axes
-from cgamesh.meshing.derivative_bounds import cell_bounds, cell_derivatives, lengths, segment_samples
+from cgamesh.meshing.derivative_bounds import cell_derivatives, lengths, segment_samples
 from cgamesh.meshing.normal_projection import normal_projection_error, normal_projection_spacing
 from cgamesh.meshing.ribbon_twist import ribbon_twist_error, ribbon_twist_spacing, ribbon_twist_terms
 
@@ -125,11 +125,12 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
     shape = t.shape
     scale = surface.frame.scale
     grid = lambda values: values.reshape(shape + values.shape[1:])  # noqa: E731
-    path = cell_derivatives(grid(centre))
-    cosine = cell_derivatives(grid(radius[:, None] * u))
-    sine = cell_derivatives(grid(radius[:, None] * v))
-    r0, r1, _ = cell_bounds(grid(radius[:, None]))
-    _, n1, n2 = cell_bounds(grid(normal))
+    # One call on the members side by side (fewer, larger array operations; the same bits).
+    members = cell_derivatives(grid(np.concatenate(
+        [centre, radius[:, None] * u, radius[:, None] * v, radius[:, None], normal], axis=1)))
+    path, cosine, sine = members.columns(0, 3), members.columns(3, 6), members.columns(6, 9)
+    r0, r1, _ = members.columns(9, 10).norms()
+    _, n1, n2 = members.columns(10, 13).norms()
     # max over theta of |G| = |a + B cos theta + C sin theta|: on ANGLES angles, plus the most
     # g = |G|^2 can grow from the nearest of them to a maximum between (where g' = 0):
     # (spacing^2 / 8) max |g''|, with g'' = 2 |G'|^2 + 2 G . G'' and |G'|, |G''| <= reach.
