@@ -409,53 +409,72 @@ def _place(density: np.ndarray, counts: np.ndarray, cells: int) -> np.ndarray:
 
 
 class _RangeMax:
-    """Maxima of per-cell arrays over ranges of cells (a sparse table: O(n log n) to build)."""
+    """Maxima of per-cell arrays over ranges of cells (a sparse table: O(n log n) to build).
+
+    Level j holds the maxima over 2^j cells from each cell on; a range is covered by two
+    (overlapping) blocks of its level. The levels share one array (levels, cells, columns),
+    so a query of any ranges is two gathers (entries past a level's end are never read)."""
 
     def __init__(self, columns: np.ndarray):
-        self.levels = [columns]
-        width = 1
-        while 2 * width <= len(columns):
-            last = self.levels[-1]
-            self.levels.append(np.maximum(last[:-width], last[width:]))
-            width *= 2
+        count = len(columns)
+        depth = max(1, count.bit_length())  # levels 0 .. floor(log2(count))
+        self.levels = np.empty((depth,) + columns.shape)
+        self.levels[0] = columns
+        for j in range(1, depth):
+            width, size = 1 << (j - 1), count - (1 << j) + 1  # level j's valid entries
+            last = self.levels[j - 1]
+            np.maximum(last[:size], last[width:width + size], out=self.levels[j, :size])
 
     def query(self, first: np.ndarray, last: np.ndarray) -> np.ndarray:
-        span = last - first + 1
-        level = np.floor(np.log2(span)).astype(int)
-        out = np.empty((len(first),) + self.levels[0].shape[1:])
-        for j in np.unique(level):
-            chosen = level == j
-            table = self.levels[j]
-            out[chosen] = np.maximum(table[first[chosen]], table[last[chosen] - (1 << j) + 1])
-        return out
+        level = np.floor(np.log2(last - first + 1)).astype(int)
+        return np.maximum(self.levels[level, first], self.levels[level, last - (1 << level) + 1])
 
 
 def _interval_errors(family: _Surface, cells: _Cells, table: _RangeMax, names, t: np.ndarray, around: int):
     """The bound E of every interval [t_k, t_k+1] (K-1,), with the maxima over every cell it touches,
     and the first and last cell indices."""
+    first, last = _touched(cells, t)
+    if family.kind == "circles":  # the widened maxima too, in the same query
+        wide_first, wide_last, margin = _widened_range(cells, t)
+        maxima = table.query(np.concatenate([first, wide_first]), np.concatenate([last, wide_last]))
+        terms, wide = _named(names, maxima[:len(first)]), _named(names, maxima[len(first):])
+        wide["margin"] = margin
+    else:
+        terms, wide = _named(names, table.query(first, last)), None
+    return family.error(terms, t[1:] - t[:-1], around, cells.closed_rate, wide), first, last, terms
+
+
+def _named(names, maxima: np.ndarray) -> dict:
+    return {name: maxima[:, i] for i, name in enumerate(names)}
+
+
+def _touched(cells: _Cells, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The first and last cell each interval [t_k, t_k+1] touches (np.minimum and np.maximum
+    rather than np.clip: the same integers, at less overhead on the few intervals of a plan)."""
     n = cells.segments * cells.cells
-    first = np.clip(np.floor(t[:-1] * cells.cells).astype(np.int64), 0, n - 1)
-    last = np.clip(np.ceil(t[1:] * cells.cells).astype(np.int64) - 1, first, n - 1)
-    maxima = table.query(first, last)
-    terms = {name: maxima[:, i] for i, name in enumerate(names)}
-    h = np.diff(t)
-    wide = _widened(cells, table, names, t) if family.kind == "circles" else None
-    return family.error(terms, h, around, cells.closed_rate, wide), first, last, terms
+    first = np.minimum(np.maximum(np.floor(t[:-1] * cells.cells).astype(np.int64), 0), n - 1)
+    last = np.minimum(np.maximum(np.ceil(t[1:] * cells.cells).astype(np.int64) - 1, first), n - 1)
+    return first, last
 
 
 def _widened(cells: _Cells, table: _RangeMax, names, t: np.ndarray) -> dict:
     """Per interval the term maxima over it widened by ``margin`` = min(h, its distance to its
     segment's ends) on each side: where the normal projection's step along t may reach (never
     across a joint, where the members are not twice differentiable)."""
-    segment = np.clip(np.floor(t[:-1]), 0, cells.segments - 1)
-    margin = np.maximum(np.minimum(np.minimum(np.diff(t), t[:-1] - segment), segment + 1.0 - t[1:]), 0.0)
-    low, high = segment * cells.cells, (segment + 1) * cells.cells - 1
-    first = np.clip(np.floor((t[:-1] - margin) * cells.cells), low, high).astype(np.int64)
-    last = np.clip(np.ceil((t[1:] + margin) * cells.cells) - 1, first, high).astype(np.int64)
-    maxima = table.query(first, last)
-    wide = {name: maxima[:, i] for i, name in enumerate(names)}
+    first, last, margin = _widened_range(cells, t)
+    wide = _named(names, table.query(first, last))
     wide["margin"] = margin
     return wide
+
+
+def _widened_range(cells: _Cells, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(first cell, last cell, margin) of each interval widened as ``_widened`` says."""
+    segment = np.minimum(np.maximum(np.floor(t[:-1]), 0), cells.segments - 1)
+    margin = np.maximum(np.minimum(np.minimum(t[1:] - t[:-1], t[:-1] - segment), segment + 1.0 - t[1:]), 0.0)
+    low, high = segment * cells.cells, (segment + 1) * cells.cells - 1
+    first = np.minimum(np.maximum(np.floor((t[:-1] - margin) * cells.cells), low), high).astype(np.int64)
+    last = np.minimum(np.maximum(np.ceil((t[1:] + margin) * cells.cells) - 1, first), high).astype(np.int64)
+    return first, last, margin
 
 
 class _IntervalErrors:
