@@ -43,7 +43,8 @@ from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.meshing.circles import transported_frames
 from cgamesh.meshing.dense_transport import transported_axes
 from cgamesh.meshing.derivative_bounds import cell_derivatives, lengths, segment_samples
-from cgamesh.meshing.normal_projection import normal_projection_error, normal_projection_spacing
+from cgamesh.meshing.normal_projection import (full_second_derivatives, normal_projection_error,
+                                               normal_projection_spacing, spin_bounds)
 from cgamesh.meshing.ribbon_twist import ribbon_twist_error, ribbon_twist_spacing, ribbon_twist_terms
 
 # Cells per segment of the derivative sampling: at least this many, and about this many per
@@ -210,19 +211,16 @@ def _circle_error(terms: dict, h, around, rate: float, wide: dict | None = None)
     2 B psi' + r (psi'^2 + |psi''|) to A and r psi' to B. With ``wide`` (the maxima over each
     interval widened within its segment), the bound by the error normal to the surface
     (cgamesh.meshing.normal_projection) is a third one: E is the smallest."""
-    n1, n2, rm = terms["N1"], terms["N2"], terms["Rm"]
+    n1, rm = terms["N1"], terms["Rm"]
     turned = h * n1  # bounds |n(t) - n(t_k)| over the interval
-    q = 2.0 - 0.5 * turned * turned  # <= 1 + n(t_k) . n(t)
+    spin, spin_rate = spin_bounds(n1, terms["N2"], turned, rate)
+    a, b = full_second_derivatives(terms, spin, spin_rate)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        spin = turned * n1 / q + rate
-        spin_rate = turned * n2 / q + (turned * n1 / q) ** 2
-        a = terms["A"] + 2.0 * terms["B"] * spin + rm * (spin * spin + spin_rate)
-        b = terms["B"] + rm * spin
         sag = rm * (1.0 - np.cos(np.pi / around))
         error = sag + a * h * h / 8.0 + b * h * np.sin(np.pi / around) / 2.0
         error = np.minimum(error, sag + _normal_twist_error(terms, h, around, a, b, spin, spin_rate))
-    if wide is not None:
-        error = np.minimum(error, normal_projection_error(terms, wide, h, around, rate))
+    if wide is not None:  # the third bound, on the same mesh frame
+        error = np.minimum(error, normal_projection_error(terms, wide, h, around, rate, (spin, spin_rate, a, b)))
     return np.where(turned < 1.0, error, np.inf)
 
 
