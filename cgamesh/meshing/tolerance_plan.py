@@ -116,14 +116,43 @@ def _read(surface: EvolvedSurface, t: np.ndarray) -> np.ndarray:
     return np.concatenate([surface.sample_blades(part) for part in parts])
 
 
-def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
+class _Samples:
+    """A surface's blades at ``segment_samples(segments, cells)``, each parameter read once: a
+    finer sampling reads only the parameters the last one lacks (the cell counts are powers of
+    two, so the last one's parameters are among its own, the same floats). A parameter's blade
+    does not depend on the others read with it (the products sum each row's terms in one
+    order, whatever the batch), so the blades are the same bits as one read of them all."""
+
+    def __init__(self, surface: EvolvedSurface):
+        self.surface = surface
+        self._last: tuple[np.ndarray, np.ndarray] | None = None  # parameters, blades (segments, cells + 1, 32)
+
+    def read(self, cells: int) -> np.ndarray:
+        """The blades (segments * (cells + 1), 32), segment-major."""
+        t = segment_samples(self.surface.segment_count, cells)
+        blades = None
+        if self._last is not None:
+            known_t, known = self._last
+            step, rest = divmod(cells, known_t.shape[1] - 1)
+            if step > 1 and rest == 0 and np.array_equal(t[:, ::step], known_t):
+                new = np.arange(cells + 1) % step != 0
+                blades = np.empty(t.shape + known.shape[2:])
+                blades[:, ::step] = known
+                blades[:, new] = _read(self.surface, t[:, new].ravel()).reshape(len(t), -1, known.shape[2])
+        if blades is None:
+            blades = _read(self.surface, t.ravel()).reshape(t.shape + (-1,))
+        self._last = t, blades
+        return blades.reshape(t.size, -1)
+
+
+def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool, blades: np.ndarray) -> _Cells:
     """Per cell: A >= |d2x/dt2| and B >= |d2x/dt dtheta| for x = c + r (cos theta u + sin theta v)
     in the sampled transported frame (u, v), their vectors combined (no triangle inequality
-    between the centre's, the radius' and the frame's parts), the largest radius, |n'| and |n''|."""
-    t = segment_samples(surface.segment_count, cells)
-    centre, normal, radius = circle_euclidean(_read(surface, t.ravel()))
+    between the centre's, the radius' and the frame's parts), the largest radius, |n'| and |n''|.
+    blades: the circles at ``segment_samples(segments, cells)``, segment-major."""
+    centre, normal, radius = circle_euclidean(blades)
     u, v = transported_axes(normal)
-    shape = t.shape
+    shape = (surface.segment_count, cells + 1)
     scale = surface.frame.scale
     grid = lambda values: values.reshape(shape + values.shape[1:])  # noqa: E731
     # One call on the members side by side (fewer, larger array operations; the same bits).
@@ -188,10 +217,9 @@ def _turn(u: np.ndarray, normal: np.ndarray) -> float:
     return abs(float(np.arctan2(np.dot(np.cross(u[0], u[-1]), normal[0]), np.dot(u[0], u[-1]))))
 
 
-def _ribbon_cells(surface: EvolvedSurface, cells: int) -> _Cells:
-    t = segment_samples(surface.segment_count, cells)
-    a, b = point_pair_endpoints(_read(surface, t.ravel()))
-    shape = t.shape + (3,)
+def _ribbon_cells(surface: EvolvedSurface, cells: int, blades: np.ndarray) -> _Cells:
+    a, b = point_pair_endpoints(blades)
+    shape = (surface.segment_count, cells + 1, 3)
     scale = surface.frame.scale
     ends, other, across = (cell_derivatives(x.reshape(shape)) for x in (a, b, b - a))
     _, _, a2 = ends.norms()
@@ -313,11 +341,13 @@ class _Surface:
 
     def __init__(self, surface: EvolvedSurface, kind: str, closed: bool):
         self.surface, self.kind, self.closed = surface, kind, closed
+        self._samples = _Samples(surface)
 
     def cells(self, count: int) -> _Cells:
+        blades = self._samples.read(count)
         if self.kind == "circles":
-            return _circle_cells(self.surface, count, self.closed)
-        return _ribbon_cells(self.surface, count)
+            return _circle_cells(self.surface, count, self.closed, blades)
+        return _ribbon_cells(self.surface, count, blades)
 
     def error(self, terms, h, around, rate, wide=None):
         if self.kind == "circles":
