@@ -328,7 +328,8 @@ def _root(a, b, c):
     """Positive root h of a h^2 + b h = c (0 where c <= 0, inf where a = b = 0)."""
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         h = 2.0 * c / (b + np.sqrt(b * b + 4.0 * a * np.maximum(c, 0.0)))
-    return np.where(c > 0.0, np.nan_to_num(h, nan=np.inf, posinf=np.inf), 0.0)
+    # NaN (0 / 0, inf / inf) is inf; a, b >= 0 (bounds), so h is never -inf where c > 0
+    return np.where(c > 0.0, np.where(np.isnan(h), np.inf, h), 0.0)
 
 
 def _ring_counts(density: np.ndarray, cells: int) -> np.ndarray:
