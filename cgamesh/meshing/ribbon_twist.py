@@ -102,16 +102,18 @@ def ribbon_twist_quadratic(terms: dict, across, stretch_only: bool = False):
     else:
         gt, gs, left = terms["Gt"], terms["Gs"], terms["Nt"]
     with np.errstate(invalid="ignore", over="ignore"):
-        a_hat = (1.0 + kappa * gt) ** 2 * a + 2.0 * (1.0 + kappa * gt) * kappa * gs * b
+        reach = kappa * gt  # kappa |gamma_t|, computed once (the same bits as in each term)
+        lift = 1.0 + reach
+        a_hat = lift ** 2 * a + 2.0 * lift * kappa * gs * b
         # B^ = b0 + h b1: the normal twist at q0 and the residual's change over the quad (half the
         # quad each way), plus what Phi's slopes add; C^ = h c1 + h^2 c2.
         b0 = left + 1.5 * kappa * gt * b
-        b1 = (0.5 * terms["D2"] + 0.5 * gt * a + 1.5 * gs * b + 2.0 * kappa * gt * gs * b + (1.0 + kappa * gt) * gt * a)
+        b1 = (0.5 * terms["D2"] + 0.5 * gt * a + 1.5 * gs * b + 2.0 * kappa * gt * gs * b + lift * gt * a)
         c1 = 2.0 * gt * b
         c2 = gt * gt * a + 2.0 * gt * gs * b
         square = a_hat / 8.0 + kappa / 4.0 * b1 + kappa * kappa / 8.0 * c2
         linear = kappa / 4.0 * b0 + kappa * kappa / 8.0 * c1
-        valid = (kappa * gt <= 1.0) & np.isfinite(square) & np.isfinite(linear)
+        valid = (reach <= 1.0) & np.isfinite(square) & np.isfinite(linear)
     return np.where(valid, square, 0.0), np.where(valid, linear, 0.0), valid
 
 

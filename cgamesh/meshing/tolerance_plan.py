@@ -275,24 +275,27 @@ def _normal_twist_terms(terms: dict, around, a, b, spin, spin_rate):
     k = 2.0 * np.pi / around
     chord = 2.0 * np.sin(np.pi / around) / k  # |L'|
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        axial = -terms["negCn"] - rm * n1  # <= |n . P_t|
-        gamma = rm * n1 / axial * chord  # >= |gamma_t|
+        rn1, rspin = rm * n1, rm * spin  # each computed once (the same bits as in each term)
+        axial = -terms["negCn"] - rn1  # <= |n . P_t|
+        gamma = rn1 / axial * chord  # >= |gamma_t|
         shear = terms["R1"] / -terms["negRmin"]  # >= |gamma_theta| = |r'| / r
-        tilt = np.minimum(1.0, (terms["Cx"] + terms["R1"] + rm * spin) / axial)  # >= |n x P_t| / |P_t|
-        rest = rm * spin + rm * n1 * tilt  # >= |P_t theta - gamma . J| / |L'| where gamma is chosen
+        tilt = np.minimum(1.0, (terms["Cx"] + terms["R1"] + rspin) / axial)  # >= |n x P_t| / |P_t|
+        rest = rspin + rn1 * tilt  # >= |P_t theta - gamma . J| / |L'| where gamma is chosen
         turning = terms["Ar"] + 2.0 * terms["B"] * spin + rm * (spin * spin + spin_rate)  # >= |(r F)''|
         twist = chord * b  # >= |P_t theta|
-        a_hat = (1.0 + k * gamma) ** 2 * a + 2.0 * (1.0 + k * gamma) * k * shear * twist
+        reach = k * gamma
+        lift = 1.0 + reach
+        a_hat = lift ** 2 * a + 2.0 * lift * k * shear * twist
         # B^ = B0 + h B1 (B0: the twist left at the quad's middle; B1: its change over the quad and
         # what Phi's slopes add); C^ = h C1 + h^2 C2.
         b0 = chord * rest + 1.5 * k * gamma * twist
         b1 = (0.5 * chord * turning + 0.5 * gamma * a + 1.5 * shear * twist + 2.0 * k * gamma * shear * twist
-              + (1.0 + k * gamma) * gamma * a)
+              + lift * gamma * a)
         c1 = 2.0 * gamma * twist
         c2 = gamma * gamma * a + 2.0 * gamma * shear * twist
         square = a_hat / 8.0 + k / 4.0 * b1 + k * k / 8.0 * c2
         linear = k / 4.0 * b0 + k * k / 8.0 * c1
-        valid = (axial > 0.0) & (k * gamma <= 1.0) & np.isfinite(shear) & np.isfinite(square) & np.isfinite(linear)
+        valid = (axial > 0.0) & (reach <= 1.0) & np.isfinite(shear) & np.isfinite(square) & np.isfinite(linear)
     return square, linear, valid
 
 
