@@ -117,40 +117,45 @@ def _read(surface: EvolvedSurface, t: np.ndarray) -> np.ndarray:
 
 
 class _Samples:
-    """A surface's blades at ``segment_samples(segments, cells)``, each parameter read once: a
-    finer sampling reads only the parameters the last one lacks (the cell counts are powers of
-    two, so the last one's parameters are among its own, the same floats). A parameter's blade
-    does not depend on the others read with it (the products sum each row's terms in one
-    order, whatever the batch), so the blades are the same bits as one read of them all."""
+    """What the cells need of a surface's objects (``members``: circle centres, normals and radii;
+    ribbon end points) at ``segment_samples(segments, cells)``, each parameter read once: a finer
+    sampling reads only the parameters the last one lacks (the cell counts are powers of two, so
+    the last one's parameters are among its own, the same floats). A parameter's blade and its
+    members do not depend on the others read with it (the products sum each row's terms in one
+    order, whatever the batch), so they are the same bits as one read of them all."""
 
-    def __init__(self, surface: EvolvedSurface):
-        self.surface = surface
-        self._last: tuple[np.ndarray, np.ndarray] | None = None  # parameters, blades (segments, cells + 1, 32)
+    def __init__(self, surface: EvolvedSurface, members):
+        self.surface, self.members = surface, members  # members(blades (K, 32)) -> arrays (K, ...)
+        self._last: tuple | None = None  # parameters (segments, cells + 1), members (segments, cells + 1, ...)
 
-    def read(self, cells: int) -> np.ndarray:
-        """The blades (segments * (cells + 1), 32), segment-major."""
+    def read(self, cells: int) -> tuple[np.ndarray, ...]:
+        """The members (segments * (cells + 1), ...), segment-major."""
         t = segment_samples(self.surface.segment_count, cells)
-        blades = None
+        values = None
         if self._last is not None:
             known_t, known = self._last
             step, rest = divmod(cells, known_t.shape[1] - 1)
             if step > 1 and rest == 0 and np.array_equal(t[:, ::step], known_t):
                 new = np.arange(cells + 1) % step != 0
-                blades = np.empty(t.shape + known.shape[2:])
-                blades[:, ::step] = known
-                blades[:, new] = _read(self.surface, t[:, new].ravel()).reshape(len(t), -1, known.shape[2])
-        if blades is None:
-            blades = _read(self.surface, t.ravel()).reshape(t.shape + (-1,))
-        self._last = t, blades
-        return blades.reshape(t.size, -1)
+                values = tuple(np.empty(t.shape + old.shape[2:]) for old in known)
+                for value, old, fresh in zip(values, known, self._at(t[:, new])):
+                    value[:, ::step] = old
+                    value[:, new] = fresh.reshape((len(t), -1) + old.shape[2:])
+        if values is None:
+            values = tuple(value.reshape(t.shape + value.shape[1:]) for value in self._at(t))
+        self._last = t, values
+        return tuple(value.reshape((t.size,) + value.shape[2:]) for value in values)
+
+    def _at(self, t: np.ndarray) -> tuple[np.ndarray, ...]:
+        return self.members(_read(self.surface, t.ravel()))
 
 
-def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool, blades: np.ndarray) -> _Cells:
+def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool, members: tuple) -> _Cells:
     """Per cell: A >= |d2x/dt2| and B >= |d2x/dt dtheta| for x = c + r (cos theta u + sin theta v)
     in the sampled transported frame (u, v), their vectors combined (no triangle inequality
     between the centre's, the radius' and the frame's parts), the largest radius, |n'| and |n''|.
-    blades: the circles at ``segment_samples(segments, cells)``, segment-major."""
-    centre, normal, radius = circle_euclidean(blades)
+    members: the circles' (centre, normal, radius) at ``segment_samples(segments, cells)``, segment-major."""
+    centre, normal, radius = members
     u, v = transported_axes(normal)
     shape = (surface.segment_count, cells + 1)
     scale = surface.frame.scale
@@ -217,8 +222,8 @@ def _turn(u: np.ndarray, normal: np.ndarray) -> float:
     return abs(float(np.arctan2(np.dot(np.cross(u[0], u[-1]), normal[0]), np.dot(u[0], u[-1]))))
 
 
-def _ribbon_cells(surface: EvolvedSurface, cells: int, blades: np.ndarray) -> _Cells:
-    a, b = point_pair_endpoints(blades)
+def _ribbon_cells(surface: EvolvedSurface, cells: int, members: tuple) -> _Cells:
+    a, b = members  # the end points at segment_samples(segments, cells), segment-major
     shape = (surface.segment_count, cells + 1, 3)
     scale = surface.frame.scale
     # One call on the members side by side, as for circles (the same bits as three).
@@ -347,13 +352,13 @@ class _Surface:
 
     def __init__(self, surface: EvolvedSurface, kind: str, closed: bool):
         self.surface, self.kind, self.closed = surface, kind, closed
-        self._samples = _Samples(surface)
+        self._samples = _Samples(surface, circle_euclidean if kind == "circles" else point_pair_endpoints)
 
     def cells(self, count: int) -> _Cells:
-        blades = self._samples.read(count)
+        members = self._samples.read(count)
         if self.kind == "circles":
-            return _circle_cells(self.surface, count, self.closed, blades)
-        return _ribbon_cells(self.surface, count, blades)
+            return _circle_cells(self.surface, count, self.closed, members)
+        return _ribbon_cells(self.surface, count, members)
 
     def error(self, terms, h, around, rate, wide=None):
         if self.kind == "circles":
