@@ -170,9 +170,7 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool, members: tu
     # g = |G|^2 can grow from the nearest of them to a maximum between (where g' = 0):
     # (spacing^2 / 8) max |g''|, with g'' = 2 |G'|^2 + 2 G . G'' and |G'|, |G''| <= reach.
     a, b, c = path.second, cosine.second, sine.second
-    angles = 2.0 * np.pi * np.arange(ANGLES) / ANGLES
-    on_circle = lengths(a[..., None, :] + np.cos(angles)[:, None] * b[..., None, :]
-                        + np.sin(angles)[:, None] * c[..., None, :])
+    on_circle = _on_circle(a, b, c, 2.0 * np.pi * np.arange(ANGLES) / ANGLES)
     reach = np.sqrt(lengths(b) ** 2 + lengths(c) ** 2)
     curvature = 4.0 * reach * reach + 2.0 * lengths(a) * reach  # >= max |g''|
     spacing = 2.0 * np.pi / ANGLES
@@ -196,6 +194,21 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool, members: tu
     terms = dict(A=scale * along, B=scale * twist, Rm=scale * r0, N1=n1, N2=n2, Ar=scale * turning,
                  R1=scale * r1, Cx=scale * across, negCn=-scale * axial, negRmin=-scale * least)
     return _Cells(cells, terms, _turn(u, normal) / surface.segment_count if closed else 0.0)
+
+
+def _on_circle(a: np.ndarray, b: np.ndarray, c: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """|a + cos(angle) b + sin(angle) c| (..., angles) of vectors (..., 3): the terms formed one
+    component at a time on contiguous (..., angles) arrays rather than (..., angles, 3) ones, the
+    squares summed x, y, z in order as ``lengths`` (np.sum of three numbers) sums them: the same
+    bits at a third of the time."""
+    cosine, sine = np.cos(angles), np.sin(angles)
+    squared = None
+    for k in range(3):
+        term = a[..., k, None] + cosine * b[..., k, None]
+        term += sine * c[..., k, None]
+        term *= term
+        squared = term if squared is None else squared + term
+    return np.sqrt(squared, out=squared)
 
 
 def _axial_speed(normal: np.ndarray, path, n1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
