@@ -89,15 +89,18 @@ def cell_derivatives(values: np.ndarray) -> CellDerivatives:
     magnitude = np.max(np.abs(values), axis=1, keepdims=True)  # (segments, 1, d)
     rounding = READ_OUT_ROUNDING * np.maximum(magnitude, np.finfo(float).tiny)
 
-    d1 = np.diff(values, axis=1) / delta  # (segments, S, d): f' somewhere in cell i
-    d2 = np.diff(values, n=2, axis=1) / delta ** 2  # f'' at samples 1..S-1 (within a delta)
-    d3 = np.abs(np.diff(values, n=3, axis=1)) / delta ** 3 + 8.0 * rounding / delta ** 3
+    # the differences of each order from the last one's (what np.diff(values, n=k) computes)
+    first_differences = np.diff(values, axis=1)
+    second_differences = np.diff(first_differences, axis=1)
+    d1 = first_differences / delta  # (segments, S, d): f' somewhere in cell i
+    d2 = second_differences / delta ** 2  # f'' at samples 1..S-1 (within a delta)
+    d3 = np.abs(np.diff(second_differences, axis=1)) / delta ** 3 + 8.0 * rounding / delta ** 3
 
     # Third derivative over the neighbourhood [t_i-2, t_i+3] of cell i: the D3 taken there
-    # (entry m of d3 spans samples m .. m+3; cell i wants m = i-2 .. i, clipped at the ends).
-    cell = np.arange(cells)
-    entries = np.clip(cell[:, None] + np.arange(-2, 1)[None, :], 0, d3.shape[1] - 1)  # (S, 3)
-    third = LIPSCHITZ_SAFETY * d3[:, entries].max(axis=2)
+    # (entry m of d3 spans samples m .. m+3; cell i wants m = i-2 .. i, clipped at the ends):
+    # the largest of three shifted copies of d3 padded with its end entries.
+    padded = np.concatenate([d3[:, :1], d3[:, :1], d3, d3[:, -1:], d3[:, -1:]], axis=1)
+    third = LIPSCHITZ_SAFETY * np.maximum(np.maximum(padded[:, :-2], padded[:, 1:-1]), padded[:, 2:])
 
     # A point of cell i is within delta / 2 of sample i or i+1, where D2 (a hat-weighted mean of
     # f'' over one spacing each side, mean distance delta / 3) was taken; at the ends of a
