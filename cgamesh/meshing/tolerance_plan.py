@@ -41,6 +41,7 @@ from cgamesh.errors import InvalidInputError
 from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
 from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.meshing.circles import transported_frames
+from cgamesh.meshing.dense_samples import DenseSamples, read_blades
 from cgamesh.meshing.dense_transport import transported_axes
 from cgamesh.meshing.derivative_bounds import cell_derivatives, lengths, segment_samples
 from cgamesh.meshing.normal_projection import (full_second_derivatives, normal_projection_error,
@@ -52,8 +53,6 @@ from cgamesh.meshing.ribbon_twist import ribbon_twist_error, ribbon_twist_spacin
 MIN_CELLS = 32
 MAX_CELLS = 256
 CELLS_PER_RING = 4
-# Samples read out per call (the projection's batched products slow down beyond).
-SAMPLE_CHUNK = 512
 # Counts around / across tried when choosing the split of the tolerance.
 AROUND_CANDIDATES = 48
 MAX_ACROSS = 64
@@ -108,46 +107,6 @@ class _Cells:
     @property
     def segments(self) -> int:
         return next(iter(self.terms.values())).shape[0]
-
-
-def _read(surface: EvolvedSurface, t: np.ndarray) -> np.ndarray:
-    """The projected blades at parameters t, read in chunks of SAMPLE_CHUNK."""
-    parts = np.array_split(t, max(1, math.ceil(len(t) / SAMPLE_CHUNK)))
-    return np.concatenate([surface.sample_blades(part) for part in parts])
-
-
-class _Samples:
-    """What the cells need of a surface's objects (``members``: circle centres, normals and radii;
-    ribbon end points) at ``segment_samples(segments, cells)``, each parameter read once: a finer
-    sampling reads only the parameters the last one lacks (the cell counts are powers of two, so
-    the last one's parameters are among its own, the same floats). A parameter's blade and its
-    members do not depend on the others read with it (the products sum each row's terms in one
-    order, whatever the batch), so they are the same bits as one read of them all."""
-
-    def __init__(self, surface: EvolvedSurface, members):
-        self.surface, self.members = surface, members  # members(blades (K, 32)) -> arrays (K, ...)
-        self._last: tuple | None = None  # parameters (segments, cells + 1), members (segments, cells + 1, ...)
-
-    def read(self, cells: int) -> tuple[np.ndarray, ...]:
-        """The members (segments * (cells + 1), ...), segment-major."""
-        t = segment_samples(self.surface.segment_count, cells)
-        values = None
-        if self._last is not None:
-            known_t, known = self._last
-            step, rest = divmod(cells, known_t.shape[1] - 1)
-            if step > 1 and rest == 0 and np.array_equal(t[:, ::step], known_t):
-                new = np.arange(cells + 1) % step != 0
-                values = tuple(np.empty(t.shape + old.shape[2:]) for old in known)
-                for value, old, fresh in zip(values, known, self._at(t[:, new])):
-                    value[:, ::step] = old
-                    value[:, new] = fresh.reshape((len(t), -1) + old.shape[2:])
-        if values is None:
-            values = tuple(value.reshape(t.shape + value.shape[1:]) for value in self._at(t))
-        self._last = t, values
-        return tuple(value.reshape((t.size,) + value.shape[2:]) for value in values)
-
-    def _at(self, t: np.ndarray) -> tuple[np.ndarray, ...]:
-        return self.members(_read(self.surface, t.ravel()))
 
 
 def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool, members: tuple) -> _Cells:
@@ -365,7 +324,7 @@ class _Surface:
 
     def __init__(self, surface: EvolvedSurface, kind: str, closed: bool):
         self.surface, self.kind, self.closed = surface, kind, closed
-        self._samples = _Samples(surface, circle_euclidean if kind == "circles" else point_pair_endpoints)
+        self._samples = DenseSamples(surface, circle_euclidean if kind == "circles" else point_pair_endpoints)
 
     def cells(self, count: int) -> _Cells:
         members = self._samples.read(count)
@@ -631,7 +590,7 @@ def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarr
         # The loop's frames are turned by the holonomy of these rings' transport, spread evenly:
         # bound again with its rate until the rate assumed covers it.
         for _ in range(HOLONOMY_ROUNDS):
-            _, normal, _ = circle_euclidean(_read(surface, t))
+            _, normal, _ = circle_euclidean(read_blades(surface, t))
             rate = _holonomy(normal, t) / surface.segment_count
             if rate <= cells.closed_rate:
                 break
