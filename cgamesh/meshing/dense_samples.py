@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from cgamesh.geometry.objects import circle_euclidean
 from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.meshing.derivative_bounds import segment_samples
 
@@ -23,15 +24,31 @@ from cgamesh.meshing.derivative_bounds import segment_samples
 SAMPLE_CHUNK = 512
 
 
+def _chunks(t: np.ndarray) -> list[np.ndarray]:
+    return np.array_split(t, max(1, math.ceil(len(t) / SAMPLE_CHUNK)))
+
+
 def read_blades(surface: EvolvedSurface, t: np.ndarray) -> np.ndarray:
     """The projected blades at parameters t, read in chunks of SAMPLE_CHUNK."""
-    parts = np.array_split(t, max(1, math.ceil(len(t) / SAMPLE_CHUNK)))
-    return np.concatenate([surface.sample_blades(part) for part in parts])
+    return np.concatenate([surface.sample_blades(part) for part in _chunks(t)])
+
+
+def circle_members(surface: EvolvedSurface, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The circles' centres, unit normals and radii at parameters t (the surface's frame)."""
+    return circle_euclidean(read_blades(surface, t))
+
+
+def pair_members(surface: EvolvedSurface, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The point pairs' end points a, b at parameters t (the surface's frame): those the read
+    found checking them (``sample_pair_ends``), the same bits as point_pair_endpoints of the blades."""
+    ends = [surface.sample_pair_ends(part) for part in _chunks(t)]
+    return np.concatenate([a for a, _ in ends]), np.concatenate([b for _, b in ends])
 
 
 class DenseSamples:
-    """``members(blades)`` (arrays with a row per blade) of a surface at its samplings, the last
-    one kept so that a finer one reads only the parameters it lacks."""
+    """``members(surface, t)`` (arrays with a row per parameter: ``circle_members`` or
+    ``pair_members``) at the surface's samplings, the last one kept so that a finer one reads
+    only the parameters it lacks."""
 
     def __init__(self, surface: EvolvedSurface, members):
         self.surface, self.members = surface, members
@@ -57,4 +74,4 @@ class DenseSamples:
         return tuple(value.reshape((t.size,) + value.shape[2:]) for value in values)
 
     def _at(self, t: np.ndarray) -> tuple[np.ndarray, ...]:
-        return self.members(read_blades(self.surface, t.ravel()))
+        return self.members(self.surface, t.ravel())

@@ -38,10 +38,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from cgamesh.errors import InvalidInputError
-from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
+from cgamesh.geometry.objects import circle_euclidean
 from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.meshing.circles import transported_frames
-from cgamesh.meshing.dense_samples import DenseSamples, read_blades
+from cgamesh.meshing.dense_samples import DenseSamples, circle_members, pair_members, read_blades
 from cgamesh.meshing.dense_transport import transported_axes
 from cgamesh.meshing.derivative_bounds import cell_derivatives, lengths, segment_samples
 from cgamesh.meshing.normal_projection import (full_second_derivatives, normal_projection_error,
@@ -324,7 +324,7 @@ class _Surface:
 
     def __init__(self, surface: EvolvedSurface, kind: str, closed: bool):
         self.surface, self.kind, self.closed = surface, kind, closed
-        self._samples = DenseSamples(surface, circle_euclidean if kind == "circles" else point_pair_endpoints)
+        self._samples = DenseSamples(surface, circle_members if kind == "circles" else pair_members)
 
     def cells(self, count: int) -> _Cells:
         members = self._samples.read(count)
