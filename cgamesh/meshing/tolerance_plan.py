@@ -120,11 +120,11 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool, members: tu
     scale = surface.frame.scale
     grid = lambda values: values.reshape(shape + values.shape[1:])  # noqa: E731
     # One call on the members side by side (fewer, larger array operations; the same bits).
-    members = cell_derivatives(grid(np.concatenate(
+    bounds = cell_derivatives(grid(np.concatenate(
         [centre, radius[:, None] * u, radius[:, None] * v, radius[:, None], normal], axis=1)))
-    path, cosine, sine = members.columns(0, 3), members.columns(3, 6), members.columns(6, 9)
-    r0, r1, _ = members.columns(9, 10).norms()
-    _, n1, n2 = members.columns(10, 13).norms()
+    path, cosine, sine = bounds.columns(0, 3), bounds.columns(3, 6), bounds.columns(6, 9)
+    r0, r1, _ = bounds.columns(9, 10).norms()
+    _, n1, n2 = bounds.columns(10, 13).norms()
     # max over theta of |G| = |a + B cos theta + C sin theta|: on ANGLES angles, plus the most
     # g = |G|^2 can grow from the nearest of them to a maximum between (where g' = 0):
     # (spacing^2 / 8) max |g''|, with g'' = 2 |G'|^2 + 2 G . G'' and |G'|, |G''| <= reach.
@@ -199,8 +199,8 @@ def _ribbon_cells(surface: EvolvedSurface, cells: int, members: tuple) -> _Cells
     shape = (surface.segment_count, cells + 1, 3)
     scale = surface.frame.scale
     # One call on the members side by side, as for circles (the same bits as three).
-    members = cell_derivatives(np.concatenate([a, b, b - a], axis=1).reshape(shape[:2] + (9,)))
-    ends, other, across = members.columns(0, 3), members.columns(3, 6), members.columns(6, 9)
+    bounds = cell_derivatives(np.concatenate([a, b, b - a], axis=1).reshape(shape[:2] + (9,)))
+    ends, other, across = bounds.columns(0, 3), bounds.columns(3, 6), bounds.columns(6, 9)
     _, _, a2 = ends.norms()
     _, _, b2 = other.norms()
     _, d1, _ = across.norms()
