@@ -110,7 +110,14 @@ class MotorSurface:
 
     def check_projection_exists(self, sampled: np.ndarray | None = None) -> None:
         """Raise where the normal spline nearly vanishes (the only way a motor curve loses its circle)."""
+        self._normals_checked
+
+    @cached_property
+    def _normals_checked(self) -> bool:
+        """The scan of ``check_projection_exists``, done once per surface (a tolerance run checks
+        before planning and the mesher again on the planned rings: the scan does not depend on them)."""
         self.path.check_normals(self.name, SCAN_SAMPLES_PER_SEGMENT)
+        return True
 
     def circles(self, t: np.ndarray) -> MotionState:
         """Circles and their rates at t, in world units (centre, radius and their rates scaled)."""

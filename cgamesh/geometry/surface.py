@@ -78,23 +78,30 @@ class EvolvedSurface:
     def sample_blades(self, t: np.ndarray) -> np.ndarray:
         """The projected objects (A, 32) of ``sample(t)``, bit for bit, refused where it refuses,
         without their derivatives (about a third of the work)."""
+        return self._blades_and_ends(t)[0]
+
+    def sample_pair_ends(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The end points (a, b) (A, 3) of the point pairs ``sample_blades(t)``, refused where it
+        refuses: the ones its check for end points at infinity finds, not found again."""
+        return self._blades_and_ends(t)[1]
+
+    def _blades_and_ends(self, t: np.ndarray):
         t = np.asarray(t, dtype=np.float64)
         basis = self.curve.basis(t)
         blades, margin_ = project_without_derivatives(basis.value(self.controls), self.grade, basis.weight_sum(),
                                                       self.four_vector_free)
         self._refuse_small_margin(t, margin_)
-        if self.grade == 2:
-            self._refuse_ends_at_infinity(t, blades)
-        return blades
+        return blades, (self._refuse_ends_at_infinity(t, blades) if self.grade == 2 else None)
 
-    def _refuse_ends_at_infinity(self, t: np.ndarray, pairs: np.ndarray) -> None:
+    def _refuse_ends_at_infinity(self, t: np.ndarray, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """A projected point pair can be real and still have an end point at infinity (the
-        interpolant of two parallel, translated segments can be a flat point there)."""
+        interpolant of two parallel, translated segments can be a flat point there). Returns
+        the end points (a, b) when they are all finite."""
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             a, b = point_pair_endpoints(pairs)
         bad = ~(np.isfinite(a).all(axis=-1) & np.isfinite(b).all(axis=-1))
         if not bad.any():
-            return
+            return a, b
         worst = int(np.argmax(bad))
         segment = min(int(t[worst]), self.segment_count - 1)
         raise DegenerateGeometryError(

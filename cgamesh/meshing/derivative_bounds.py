@@ -58,6 +58,13 @@ class CellDerivatives:
     second: np.ndarray
     second_radius: np.ndarray
 
+    def columns(self, start: int, stop: int) -> CellDerivatives:
+        """The bounds of components start..stop-1 alone: every bound is taken component by
+        component, so one call on stacked members gives each member's own bounds, bit for bit."""
+        pick = slice(start, stop)
+        return CellDerivatives(self.value[..., pick], self.first[..., pick], self.first_radius[..., pick],
+                               self.second[..., pick], self.second_radius[..., pick])
+
     def norms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Upper bounds (segments, S) of |f|, |f'| and |f''| (Euclidean norms) over each cell."""
         return (lengths(self.value), lengths(np.abs(self.first) + self.first_radius),
@@ -82,15 +89,18 @@ def cell_derivatives(values: np.ndarray) -> CellDerivatives:
     magnitude = np.max(np.abs(values), axis=1, keepdims=True)  # (segments, 1, d)
     rounding = READ_OUT_ROUNDING * np.maximum(magnitude, np.finfo(float).tiny)
 
-    d1 = np.diff(values, axis=1) / delta  # (segments, S, d): f' somewhere in cell i
-    d2 = np.diff(values, n=2, axis=1) / delta ** 2  # f'' at samples 1..S-1 (within a delta)
-    d3 = np.abs(np.diff(values, n=3, axis=1)) / delta ** 3 + 8.0 * rounding / delta ** 3
+    # the differences of each order from the last one's (what np.diff(values, n=k) computes)
+    first_differences = np.diff(values, axis=1)
+    second_differences = np.diff(first_differences, axis=1)
+    d1 = first_differences / delta  # (segments, S, d): f' somewhere in cell i
+    d2 = second_differences / delta ** 2  # f'' at samples 1..S-1 (within a delta)
+    d3 = np.abs(np.diff(second_differences, axis=1)) / delta ** 3 + 8.0 * rounding / delta ** 3
 
     # Third derivative over the neighbourhood [t_i-2, t_i+3] of cell i: the D3 taken there
-    # (entry m of d3 spans samples m .. m+3; cell i wants m = i-2 .. i, clipped at the ends).
-    cell = np.arange(cells)
-    entries = np.clip(cell[:, None] + np.arange(-2, 1)[None, :], 0, d3.shape[1] - 1)  # (S, 3)
-    third = LIPSCHITZ_SAFETY * d3[:, entries].max(axis=2)
+    # (entry m of d3 spans samples m .. m+3; cell i wants m = i-2 .. i, clipped at the ends):
+    # the largest of three shifted copies of d3 padded with its end entries.
+    padded = np.concatenate([d3[:, :1], d3[:, :1], d3, d3[:, -1:], d3[:, -1:]], axis=1)
+    third = LIPSCHITZ_SAFETY * np.maximum(np.maximum(padded[:, :-2], padded[:, 1:-1]), padded[:, 2:])
 
     # A point of cell i is within delta / 2 of sample i or i+1, where D2 (a hat-weighted mean of
     # f'' over one spacing each side, mean distance delta / 3) was taken; at the ends of a

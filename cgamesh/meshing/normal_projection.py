@@ -28,9 +28,8 @@ def spin_bounds(n1, n2, turned, rate):
     bounds |n(t) - n(t_k)| (docs/tolerance.md, "A and B for circles")."""
     q = 2.0 - 0.5 * turned * turned  # <= 1 + n(t_k) . n(t)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        spin = turned * n1 / q + rate
-        spin_rate = turned * n2 / q + (turned * n1 / q) ** 2
-    return spin, spin_rate
+        transport = turned * n1 / q  # the spin from the plane's turning alone
+        return transport + rate, turned * n2 / q + transport ** 2
 
 
 def full_second_derivatives(terms: dict, spin, spin_rate, prefix: str = ""):
@@ -51,7 +50,7 @@ def tilt_bound(terms: dict):
     radial = terms["Cx"] + terms["R1"]
     with np.errstate(divide="ignore", invalid="ignore"):
         tilt = np.where(axial > 0.0, radial / np.sqrt(radial * radial + axial * axial), 1.0)
-    return axial, np.minimum(np.nan_to_num(tilt, nan=1.0), 1.0)
+    return axial, np.fmin(tilt, 1.0)  # NaN (radial infinite) -> 1; radial >= 0, so tilt is never -inf
 
 
 def normal_twist(terms: dict, h, around, spin, tilt):
@@ -73,13 +72,17 @@ def curvature_term(terms: dict, wide: dict, tangential, axial, spin, wide_spin, 
     return rem, dt
 
 
-def normal_projection_error(terms: dict, wide: dict, h, around, rate: float):
+def normal_projection_error(terms: dict, wide: dict, h, around, rate: float, frame: tuple | None = None):
     """E of every interval by the normal projection (inf where it does not apply): ``terms`` the
     maxima over the cells the interval touches, ``wide`` those over the interval widened by
-    ``wide['margin']`` on each side within its segment."""
+    ``wide['margin']`` on each side within its segment. ``frame``: (spin, spin_rate, a, b) of
+    ``spin_bounds`` and ``full_second_derivatives`` on these intervals, when the caller has them."""
     n1, n2, rm = terms["N1"], terms["N2"], terms["Rm"]
-    spin, spin_rate = spin_bounds(n1, n2, h * n1, rate)
-    a, b = full_second_derivatives(terms, spin, spin_rate)
+    if frame is None:
+        spin, spin_rate = spin_bounds(n1, n2, h * n1, rate)
+        a, b = full_second_derivatives(terms, spin, spin_rate)
+    else:
+        spin, spin_rate, a, b = frame
     margin = wide["margin"]
     wide_turned = (h + 2.0 * margin) * wide["N1"]  # |n(t) - n(t_k)| on the widened interval
     wide_spin, wide_spin_rate = spin_bounds(wide["N1"], wide["N2"], wide_turned, rate)

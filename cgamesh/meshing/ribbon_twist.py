@@ -46,22 +46,25 @@ def ribbon_twist_terms(a: CellDerivatives, b: CellDerivatives, d: CellDerivative
     # the linear interpolation's error, (delta^2 / 8) max |d''| (the kernel is non-negative).
     centre = 0.5 * (d_values[:, :-1] + d_values[:, 1:])
     rho = 0.5 * lengths(d_values[:, 1:] - d_values[:, :-1]) + delta * delta / 8.0 * d2
-    longest = lengths(centre) + rho  # >= |d|
-    shortest = np.maximum(lengths(centre) - rho, 0.0)  # <= |d|
+    middle = lengths(centre)  # (each length and cross product below is formed once and reused)
+    longest = middle + rho  # >= |d|
+    shortest = np.maximum(middle - rho, 0.0)  # <= |d|
     a1, ra = a.first, lengths(a.first_radius)  # a' within ra of a1 over the cell (componentwise radii)
     e1, re = d.first, lengths(d.first_radius)
-    speed = lengths(e1) + re  # >= |d'|
+    a1_length, e1_length = lengths(a1), lengths(e1)
+    speed = e1_length + re  # >= |d'|
     # x_t x d = (a' + s d') x d: at the estimates P + s Q, off by at most epsilon for s in [0, 1];
     # the least |P + s Q| over [0, 1] at the clipped foot of the perpendicular.
     p, q = np.cross(a1, centre), np.cross(e1, centre)
-    epsilon = (ra + re) * longest + (lengths(a1) + lengths(e1)) * rho
+    epsilon = (ra + re) * longest + (a1_length + e1_length) * rho
     qq = np.sum(q * q, axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
         s = np.clip(np.where(qq > 0.0, -np.sum(p * q, axis=-1) / qq, 0.0), 0.0, 1.0)
     least = np.maximum(lengths(p + s[..., None] * q) - epsilon, 0.0)  # <= |x_t x d|
     # det(a', d, d') = a' . (d x d'), at the estimates a1 . (centre x e1), off by at most the rest.
-    det = (np.abs(np.sum(a1 * np.cross(centre, e1), axis=-1))
-           + ra * longest * speed + lengths(a1) * rho * speed + lengths(a1) * lengths(centre) * re)
+    stretched = np.cross(centre, e1)
+    det = (np.abs(np.sum(a1 * stretched, axis=-1))
+           + ra * longest * speed + a1_length * rho * speed + a1_length * middle * re)
     _, a_first, _ = a.norms()
     _, b_first, _ = b.norms()
     along = np.maximum(a_first, b_first)  # >= |x_t| = |(1 - s) a' + s b'|
@@ -72,7 +75,7 @@ def ribbon_twist_terms(a: CellDerivatives, b: CellDerivatives, d: CellDerivative
         gamma_s = np.where(fold | (shortest <= 0.0), np.inf, (speed + gamma_t * along) / shortest)
         # gamma = (0, d' . d / |d|^2) removes only the rulings' stretching: no fold condition, and
         # what is left, d' across d, is |d x d'| / |d|.
-        across_d = lengths(np.cross(centre, e1)) + rho * speed + lengths(centre) * re  # >= |d x d'|
+        across_d = lengths(stretched) + rho * speed + middle * re  # >= |d x d'|
         across = np.where(shortest > 0.0, across_d / shortest, np.inf)
         stretch = np.where(shortest > 0.0, speed / shortest, np.inf)
     return dict(Nt=scale * normal, Gt=gamma_t, Gs=gamma_s, D2=scale * d2, Nx=scale * across, Gx=stretch)
@@ -102,16 +105,18 @@ def ribbon_twist_quadratic(terms: dict, across, stretch_only: bool = False):
     else:
         gt, gs, left = terms["Gt"], terms["Gs"], terms["Nt"]
     with np.errstate(invalid="ignore", over="ignore"):
-        a_hat = (1.0 + kappa * gt) ** 2 * a + 2.0 * (1.0 + kappa * gt) * kappa * gs * b
+        reach = kappa * gt  # kappa |gamma_t|, computed once (the same bits as in each term)
+        lift = 1.0 + reach
+        a_hat = lift ** 2 * a + 2.0 * lift * kappa * gs * b
         # B^ = b0 + h b1: the normal twist at q0 and the residual's change over the quad (half the
         # quad each way), plus what Phi's slopes add; C^ = h c1 + h^2 c2.
         b0 = left + 1.5 * kappa * gt * b
-        b1 = (0.5 * terms["D2"] + 0.5 * gt * a + 1.5 * gs * b + 2.0 * kappa * gt * gs * b + (1.0 + kappa * gt) * gt * a)
+        b1 = (0.5 * terms["D2"] + 0.5 * gt * a + 1.5 * gs * b + 2.0 * kappa * gt * gs * b + lift * gt * a)
         c1 = 2.0 * gt * b
         c2 = gt * gt * a + 2.0 * gt * gs * b
         square = a_hat / 8.0 + kappa / 4.0 * b1 + kappa * kappa / 8.0 * c2
         linear = kappa / 4.0 * b0 + kappa * kappa / 8.0 * c1
-        valid = (kappa * gt <= 1.0) & np.isfinite(square) & np.isfinite(linear)
+        valid = (reach <= 1.0) & np.isfinite(square) & np.isfinite(linear)
     return np.where(valid, square, 0.0), np.where(valid, linear, 0.0), valid
 
 

@@ -38,12 +38,14 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from cgamesh.errors import InvalidInputError
-from cgamesh.geometry.objects import circle_euclidean, point_pair_endpoints
+from cgamesh.geometry.objects import circle_euclidean
 from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.meshing.circles import transported_frames
+from cgamesh.meshing.dense_samples import DenseSamples, circle_members, pair_members, read_blades
 from cgamesh.meshing.dense_transport import transported_axes
-from cgamesh.meshing.derivative_bounds import cell_bounds, cell_derivatives, lengths, segment_samples
-from cgamesh.meshing.normal_projection import normal_projection_error, normal_projection_spacing
+from cgamesh.meshing.derivative_bounds import cell_derivatives, lengths, segment_samples
+from cgamesh.meshing.normal_projection import (full_second_derivatives, normal_projection_error,
+                                               normal_projection_spacing, spin_bounds)
 from cgamesh.meshing.ribbon_twist import ribbon_twist_error, ribbon_twist_spacing, ribbon_twist_terms
 
 # Cells per segment of the derivative sampling: at least this many, and about this many per
@@ -51,8 +53,6 @@ from cgamesh.meshing.ribbon_twist import ribbon_twist_error, ribbon_twist_spacin
 MIN_CELLS = 32
 MAX_CELLS = 256
 CELLS_PER_RING = 4
-# Samples read out per call (the projection's batched products slow down beyond).
-SAMPLE_CHUNK = 512
 # Counts around / across tried when choosing the split of the tolerance.
 AROUND_CANDIDATES = 48
 MAX_ACROSS = 64
@@ -109,34 +109,27 @@ class _Cells:
         return next(iter(self.terms.values())).shape[0]
 
 
-def _read(surface: EvolvedSurface, t: np.ndarray) -> np.ndarray:
-    """The projected blades at parameters t, read in chunks of SAMPLE_CHUNK."""
-    parts = np.array_split(t, max(1, math.ceil(len(t) / SAMPLE_CHUNK)))
-    return np.concatenate([surface.sample_blades(part) for part in parts])
-
-
-def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
+def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool, members: tuple) -> _Cells:
     """Per cell: A >= |d2x/dt2| and B >= |d2x/dt dtheta| for x = c + r (cos theta u + sin theta v)
     in the sampled transported frame (u, v), their vectors combined (no triangle inequality
-    between the centre's, the radius' and the frame's parts), the largest radius, |n'| and |n''|."""
-    t = segment_samples(surface.segment_count, cells)
-    centre, normal, radius = circle_euclidean(_read(surface, t.ravel()))
+    between the centre's, the radius' and the frame's parts), the largest radius, |n'| and |n''|.
+    members: the circles' (centre, normal, radius) at ``segment_samples(segments, cells)``, segment-major."""
+    centre, normal, radius = members
     u, v = transported_axes(normal)
-    shape = t.shape
+    shape = (surface.segment_count, cells + 1)
     scale = surface.frame.scale
     grid = lambda values: values.reshape(shape + values.shape[1:])  # noqa: E731
-    path = cell_derivatives(grid(centre))
-    cosine = cell_derivatives(grid(radius[:, None] * u))
-    sine = cell_derivatives(grid(radius[:, None] * v))
-    r0, r1, _ = cell_bounds(grid(radius[:, None]))
-    _, n1, n2 = cell_bounds(grid(normal))
+    # One call on the members side by side (fewer, larger array operations; the same bits).
+    bounds = cell_derivatives(grid(np.concatenate(
+        [centre, radius[:, None] * u, radius[:, None] * v, radius[:, None], normal], axis=1)))
+    path, cosine, sine = bounds.columns(0, 3), bounds.columns(3, 6), bounds.columns(6, 9)
+    r0, r1, _ = bounds.columns(9, 10).norms()
+    _, n1, n2 = bounds.columns(10, 13).norms()
     # max over theta of |G| = |a + B cos theta + C sin theta|: on ANGLES angles, plus the most
     # g = |G|^2 can grow from the nearest of them to a maximum between (where g' = 0):
     # (spacing^2 / 8) max |g''|, with g'' = 2 |G'|^2 + 2 G . G'' and |G'|, |G''| <= reach.
     a, b, c = path.second, cosine.second, sine.second
-    angles = 2.0 * np.pi * np.arange(ANGLES) / ANGLES
-    on_circle = lengths(a[..., None, :] + np.cos(angles)[:, None] * b[..., None, :]
-                        + np.sin(angles)[:, None] * c[..., None, :])
+    on_circle = _on_circle(a, b, c, 2.0 * np.pi * np.arange(ANGLES) / ANGLES)
     reach = np.sqrt(lengths(b) ** 2 + lengths(c) ** 2)
     curvature = 4.0 * reach * reach + 2.0 * lengths(a) * reach  # >= max |g''|
     spacing = 2.0 * np.pi / ANGLES
@@ -160,6 +153,21 @@ def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool) -> _Cells:
     terms = dict(A=scale * along, B=scale * twist, Rm=scale * r0, N1=n1, N2=n2, Ar=scale * turning,
                  R1=scale * r1, Cx=scale * across, negCn=-scale * axial, negRmin=-scale * least)
     return _Cells(cells, terms, _turn(u, normal) / surface.segment_count if closed else 0.0)
+
+
+def _on_circle(a: np.ndarray, b: np.ndarray, c: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """|a + cos(angle) b + sin(angle) c| (..., angles) of vectors (..., 3): the terms formed one
+    component at a time on contiguous (..., angles) arrays rather than (..., angles, 3) ones, the
+    squares summed x, y, z in order as ``lengths`` (np.sum of three numbers) sums them: the same
+    bits at a third of the time."""
+    cosine, sine = np.cos(angles), np.sin(angles)
+    squared = None
+    for k in range(3):
+        term = a[..., k, None] + cosine * b[..., k, None]
+        term += sine * c[..., k, None]
+        term *= term
+        squared = term if squared is None else squared + term
+    return np.sqrt(squared, out=squared)
 
 
 def _axial_speed(normal: np.ndarray, path, n1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -186,12 +194,13 @@ def _turn(u: np.ndarray, normal: np.ndarray) -> float:
     return abs(float(np.arctan2(np.dot(np.cross(u[0], u[-1]), normal[0]), np.dot(u[0], u[-1]))))
 
 
-def _ribbon_cells(surface: EvolvedSurface, cells: int) -> _Cells:
-    t = segment_samples(surface.segment_count, cells)
-    a, b = point_pair_endpoints(_read(surface, t.ravel()))
-    shape = t.shape + (3,)
+def _ribbon_cells(surface: EvolvedSurface, cells: int, members: tuple) -> _Cells:
+    a, b = members  # the end points at segment_samples(segments, cells), segment-major
+    shape = (surface.segment_count, cells + 1, 3)
     scale = surface.frame.scale
-    ends, other, across = (cell_derivatives(x.reshape(shape)) for x in (a, b, b - a))
+    # One call on the members side by side, as for circles (the same bits as three).
+    bounds = cell_derivatives(np.concatenate([a, b, b - a], axis=1).reshape(shape[:2] + (9,)))
+    ends, other, across = bounds.columns(0, 3), bounds.columns(3, 6), bounds.columns(6, 9)
     _, _, a2 = ends.norms()
     _, _, b2 = other.norms()
     _, d1, _ = across.norms()
@@ -209,19 +218,16 @@ def _circle_error(terms: dict, h, around, rate: float, wide: dict | None = None)
     2 B psi' + r (psi'^2 + |psi''|) to A and r psi' to B. With ``wide`` (the maxima over each
     interval widened within its segment), the bound by the error normal to the surface
     (cgamesh.meshing.normal_projection) is a third one: E is the smallest."""
-    n1, n2, rm = terms["N1"], terms["N2"], terms["Rm"]
+    n1, rm = terms["N1"], terms["Rm"]
     turned = h * n1  # bounds |n(t) - n(t_k)| over the interval
-    q = 2.0 - 0.5 * turned * turned  # <= 1 + n(t_k) . n(t)
+    spin, spin_rate = spin_bounds(n1, terms["N2"], turned, rate)
+    a, b = full_second_derivatives(terms, spin, spin_rate)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        spin = turned * n1 / q + rate
-        spin_rate = turned * n2 / q + (turned * n1 / q) ** 2
-        a = terms["A"] + 2.0 * terms["B"] * spin + rm * (spin * spin + spin_rate)
-        b = terms["B"] + rm * spin
         sag = rm * (1.0 - np.cos(np.pi / around))
         error = sag + a * h * h / 8.0 + b * h * np.sin(np.pi / around) / 2.0
         error = np.minimum(error, sag + _normal_twist_error(terms, h, around, a, b, spin, spin_rate))
-    if wide is not None:
-        error = np.minimum(error, normal_projection_error(terms, wide, h, around, rate))
+    if wide is not None:  # the third bound, on the same mesh frame
+        error = np.minimum(error, normal_projection_error(terms, wide, h, around, rate, (spin, spin_rate, a, b)))
     return np.where(turned < 1.0, error, np.inf)
 
 
@@ -246,24 +252,27 @@ def _normal_twist_terms(terms: dict, around, a, b, spin, spin_rate):
     k = 2.0 * np.pi / around
     chord = 2.0 * np.sin(np.pi / around) / k  # |L'|
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        axial = -terms["negCn"] - rm * n1  # <= |n . P_t|
-        gamma = rm * n1 / axial * chord  # >= |gamma_t|
+        rn1, rspin = rm * n1, rm * spin  # each computed once (the same bits as in each term)
+        axial = -terms["negCn"] - rn1  # <= |n . P_t|
+        gamma = rn1 / axial * chord  # >= |gamma_t|
         shear = terms["R1"] / -terms["negRmin"]  # >= |gamma_theta| = |r'| / r
-        tilt = np.minimum(1.0, (terms["Cx"] + terms["R1"] + rm * spin) / axial)  # >= |n x P_t| / |P_t|
-        rest = rm * spin + rm * n1 * tilt  # >= |P_t theta - gamma . J| / |L'| where gamma is chosen
+        tilt = np.minimum(1.0, (terms["Cx"] + terms["R1"] + rspin) / axial)  # >= |n x P_t| / |P_t|
+        rest = rspin + rn1 * tilt  # >= |P_t theta - gamma . J| / |L'| where gamma is chosen
         turning = terms["Ar"] + 2.0 * terms["B"] * spin + rm * (spin * spin + spin_rate)  # >= |(r F)''|
         twist = chord * b  # >= |P_t theta|
-        a_hat = (1.0 + k * gamma) ** 2 * a + 2.0 * (1.0 + k * gamma) * k * shear * twist
+        reach = k * gamma
+        lift = 1.0 + reach
+        a_hat = lift ** 2 * a + 2.0 * lift * k * shear * twist
         # B^ = B0 + h B1 (B0: the twist left at the quad's middle; B1: its change over the quad and
         # what Phi's slopes add); C^ = h C1 + h^2 C2.
         b0 = chord * rest + 1.5 * k * gamma * twist
         b1 = (0.5 * chord * turning + 0.5 * gamma * a + 1.5 * shear * twist + 2.0 * k * gamma * shear * twist
-              + (1.0 + k * gamma) * gamma * a)
+              + lift * gamma * a)
         c1 = 2.0 * gamma * twist
         c2 = gamma * gamma * a + 2.0 * gamma * shear * twist
         square = a_hat / 8.0 + k / 4.0 * b1 + k * k / 8.0 * c2
         linear = k / 4.0 * b0 + k * k / 8.0 * c1
-        valid = (axial > 0.0) & (k * gamma <= 1.0) & np.isfinite(shear) & np.isfinite(square) & np.isfinite(linear)
+        valid = (axial > 0.0) & (reach <= 1.0) & np.isfinite(shear) & np.isfinite(square) & np.isfinite(linear)
     return square, linear, valid
 
 
@@ -299,7 +308,8 @@ def _root(a, b, c):
     """Positive root h of a h^2 + b h = c (0 where c <= 0, inf where a = b = 0)."""
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         h = 2.0 * c / (b + np.sqrt(b * b + 4.0 * a * np.maximum(c, 0.0)))
-    return np.where(c > 0.0, np.nan_to_num(h, nan=np.inf, posinf=np.inf), 0.0)
+    # NaN (0 / 0, inf / inf) is inf; a, b >= 0 (bounds), so h is never -inf where c > 0
+    return np.where(c > 0.0, np.where(np.isnan(h), np.inf, h), 0.0)
 
 
 def _ring_counts(density: np.ndarray, cells: int) -> np.ndarray:
@@ -314,11 +324,13 @@ class _Surface:
 
     def __init__(self, surface: EvolvedSurface, kind: str, closed: bool):
         self.surface, self.kind, self.closed = surface, kind, closed
+        self._samples = DenseSamples(surface, circle_members if kind == "circles" else pair_members)
 
     def cells(self, count: int) -> _Cells:
+        members = self._samples.read(count)
         if self.kind == "circles":
-            return _circle_cells(self.surface, count, self.closed)
-        return _ribbon_cells(self.surface, count)
+            return _circle_cells(self.surface, count, self.closed, members)
+        return _ribbon_cells(self.surface, count, members)
 
     def error(self, terms, h, around, rate, wide=None):
         if self.kind == "circles":
@@ -408,53 +420,72 @@ def _place(density: np.ndarray, counts: np.ndarray, cells: int) -> np.ndarray:
 
 
 class _RangeMax:
-    """Maxima of per-cell arrays over ranges of cells (a sparse table: O(n log n) to build)."""
+    """Maxima of per-cell arrays over ranges of cells (a sparse table: O(n log n) to build).
+
+    Level j holds the maxima over 2^j cells from each cell on; a range is covered by two
+    (overlapping) blocks of its level. The levels share one array (levels, cells, columns),
+    so a query of any ranges is two gathers (entries past a level's end are never read)."""
 
     def __init__(self, columns: np.ndarray):
-        self.levels = [columns]
-        width = 1
-        while 2 * width <= len(columns):
-            last = self.levels[-1]
-            self.levels.append(np.maximum(last[:-width], last[width:]))
-            width *= 2
+        count = len(columns)
+        depth = max(1, count.bit_length())  # levels 0 .. floor(log2(count))
+        self.levels = np.empty((depth,) + columns.shape)
+        self.levels[0] = columns
+        for j in range(1, depth):
+            width, size = 1 << (j - 1), count - (1 << j) + 1  # level j's valid entries
+            last = self.levels[j - 1]
+            np.maximum(last[:size], last[width:width + size], out=self.levels[j, :size])
 
     def query(self, first: np.ndarray, last: np.ndarray) -> np.ndarray:
-        span = last - first + 1
-        level = np.floor(np.log2(span)).astype(int)
-        out = np.empty((len(first),) + self.levels[0].shape[1:])
-        for j in np.unique(level):
-            chosen = level == j
-            table = self.levels[j]
-            out[chosen] = np.maximum(table[first[chosen]], table[last[chosen] - (1 << j) + 1])
-        return out
+        level = np.floor(np.log2(last - first + 1)).astype(int)
+        return np.maximum(self.levels[level, first], self.levels[level, last - (1 << level) + 1])
 
 
 def _interval_errors(family: _Surface, cells: _Cells, table: _RangeMax, names, t: np.ndarray, around: int):
     """The bound E of every interval [t_k, t_k+1] (K-1,), with the maxima over every cell it touches,
     and the first and last cell indices."""
+    first, last = _touched(cells, t)
+    if family.kind == "circles":  # the widened maxima too, in the same query
+        wide_first, wide_last, margin = _widened_range(cells, t)
+        maxima = table.query(np.concatenate([first, wide_first]), np.concatenate([last, wide_last]))
+        terms, wide = _named(names, maxima[:len(first)]), _named(names, maxima[len(first):])
+        wide["margin"] = margin
+    else:
+        terms, wide = _named(names, table.query(first, last)), None
+    return family.error(terms, t[1:] - t[:-1], around, cells.closed_rate, wide), first, last, terms
+
+
+def _named(names, maxima: np.ndarray) -> dict:
+    return {name: maxima[:, i] for i, name in enumerate(names)}
+
+
+def _touched(cells: _Cells, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The first and last cell each interval [t_k, t_k+1] touches (np.minimum and np.maximum
+    rather than np.clip: the same integers, at less overhead on the few intervals of a plan)."""
     n = cells.segments * cells.cells
-    first = np.clip(np.floor(t[:-1] * cells.cells).astype(np.int64), 0, n - 1)
-    last = np.clip(np.ceil(t[1:] * cells.cells).astype(np.int64) - 1, first, n - 1)
-    maxima = table.query(first, last)
-    terms = {name: maxima[:, i] for i, name in enumerate(names)}
-    h = np.diff(t)
-    wide = _widened(cells, table, names, t) if family.kind == "circles" else None
-    return family.error(terms, h, around, cells.closed_rate, wide), first, last, terms
+    first = np.minimum(np.maximum(np.floor(t[:-1] * cells.cells).astype(np.int64), 0), n - 1)
+    last = np.minimum(np.maximum(np.ceil(t[1:] * cells.cells).astype(np.int64) - 1, first), n - 1)
+    return first, last
 
 
 def _widened(cells: _Cells, table: _RangeMax, names, t: np.ndarray) -> dict:
     """Per interval the term maxima over it widened by ``margin`` = min(h, its distance to its
     segment's ends) on each side: where the normal projection's step along t may reach (never
     across a joint, where the members are not twice differentiable)."""
-    segment = np.clip(np.floor(t[:-1]), 0, cells.segments - 1)
-    margin = np.maximum(np.minimum(np.minimum(np.diff(t), t[:-1] - segment), segment + 1.0 - t[1:]), 0.0)
-    low, high = segment * cells.cells, (segment + 1) * cells.cells - 1
-    first = np.clip(np.floor((t[:-1] - margin) * cells.cells), low, high).astype(np.int64)
-    last = np.clip(np.ceil((t[1:] + margin) * cells.cells) - 1, first, high).astype(np.int64)
-    maxima = table.query(first, last)
-    wide = {name: maxima[:, i] for i, name in enumerate(names)}
+    first, last, margin = _widened_range(cells, t)
+    wide = _named(names, table.query(first, last))
     wide["margin"] = margin
     return wide
+
+
+def _widened_range(cells: _Cells, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(first cell, last cell, margin) of each interval widened as ``_widened`` says."""
+    segment = np.minimum(np.maximum(np.floor(t[:-1]), 0), cells.segments - 1)
+    margin = np.maximum(np.minimum(np.minimum(t[1:] - t[:-1], t[:-1] - segment), segment + 1.0 - t[1:]), 0.0)
+    low, high = segment * cells.cells, (segment + 1) * cells.cells - 1
+    first = np.minimum(np.maximum(np.floor((t[:-1] - margin) * cells.cells), low), high).astype(np.int64)
+    last = np.minimum(np.maximum(np.ceil((t[1:] + margin) * cells.cells) - 1, first), high).astype(np.int64)
+    return first, last, margin
 
 
 class _IntervalErrors:
@@ -559,7 +590,7 @@ def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarr
         # The loop's frames are turned by the holonomy of these rings' transport, spread evenly:
         # bound again with its rate until the rate assumed covers it.
         for _ in range(HOLONOMY_ROUNDS):
-            _, normal, _ = circle_euclidean(_read(surface, t))
+            _, normal, _ = circle_euclidean(read_blades(surface, t))
             rate = _holonomy(normal, t) / surface.segment_count
             if rate <= cells.closed_rate:
                 break
