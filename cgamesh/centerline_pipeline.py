@@ -207,15 +207,8 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     else:
         chains_loop = chains
     for index, chain in enumerate(chains_loop):
-        try:
-            piece = _tube(chain, index, points, radii, soma, scalar, tangents, segment_of, lines, options, stem)
-        except CgameshError as error:
-            if options.strict:
-                raise
-            skipped.append(str(error))
-            piece = None
-        for one in piece if isinstance(piece, list) else [] if piece is None else [piece]:
-            sink(one)
+        _take(lambda: _tube(chain, index, points, radii, soma, scalar, tangents, segment_of, lines, options, stem),
+              options, skipped, sink)
         progress(chain.label)
     # merged, the spheres go in blocks of SPHERE_BLOCK_VERTICES: consecutive pieces of one group merge to its mesh
     for sphere in _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem,
@@ -228,6 +221,21 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     return TubeMeshes(meshes=tuple(meshes), skipped=tuple(skipped), up=up, units=lines.units,
                       meters_per_unit=lines.meters_per_unit, chains=len(chains),
                       material=Material(color=(1.0, 1.0, 1.0)) if options.color_by != "none" else Material())
+
+
+def _take(make: Callable[[], "SurfaceMesh | list[SurfaceMesh] | None"], options: TubeOptions, skipped: list[str],
+          sink: Callable[[SurfaceMesh], None]) -> None:
+    """Hand the piece or pieces of one chain, ``make()``, to ``sink``; a chain that cannot be
+    meshed is skipped (its reason in ``skipped``), or raises when ``options.strict``."""
+    try:
+        piece = make()
+    except CgameshError as error:
+        if options.strict:
+            raise
+        skipped.append(str(error))
+        return
+    for one in piece if isinstance(piece, list) else [] if piece is None else [piece]:
+        sink(one)
 
 
 def uses_batched_pass(options: TubeOptions) -> bool:

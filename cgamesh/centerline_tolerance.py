@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.centerline_pipeline import (Centerlines, TubeOptions, _Chain, _junction_scale, _tube_finish,
+from cgamesh.centerline_pipeline import (Centerlines, TubeOptions, _Chain, _junction_scale, _take, _tube_finish,
                                          _tube_spec, _TubeSpec)
 from cgamesh.errors import CgameshError, InvalidInputError
 
@@ -110,16 +110,8 @@ def mesh_planned_tubes(planned: list[PlannedTube], scalar, options, stem, skippe
 
     for k, item in enumerate(planned):
         planned[k] = None  # the plan's cells go with it
-        try:
-            piece = _tube_finish(item.tube, mesh_planned(item.plan, False), item.chain, item.index, scalar,
-                                 options, stem)
-        except CgameshError as error:
-            if options.strict:
-                raise
-            skipped.append(str(error))
-            piece = None
-        for one in piece if isinstance(piece, list) else [] if piece is None else [piece]:
-            sink(one)
+        _take(lambda: _tube_finish(item.tube, mesh_planned(item.plan, False), item.chain, item.index, scalar,
+                                   options, stem), options, skipped, sink)
         progress(item.chain.label)
 
 
