@@ -1,6 +1,6 @@
 """Tolerance meshing on real data against the smallest uniform grids, per tube.
 
-    python benchmarks/bench_tolerance_realdata.py [--relative 1e-3] [--chains N | --whole]
+    python benchmarks/bench_tolerance_realdata.py [--relative 1e-3] [--chains N | --whole | --files [--sample N]]
 
 For the smallest of navis' example neurons (its own radii) and dipy's fornix (300 streamlines,
 radius 0.5 mm), every chain is meshed to a tolerance of ``--relative`` times the median tube
@@ -16,7 +16,8 @@ surface spec, with its tolerance and with ``Resolution(around, along)`` (checked
 measured uniform grid bit for bit); so both include building the surface and the pipeline's
 checks. By default the first 5 chains of each file (a few minutes); ``--whole`` measures every
 chain (hours for the neuron's 1,289 chains on a 2-core machine: the search for each chain's
-smallest uniform grid measures every candidate's deviation).
+smallest uniform grid measures every candidate's deviation). ``--files`` compares whole files as
+the command meshes them with one uniform resolution for the file (``compare_files``).
 """
 
 from __future__ import annotations
@@ -112,15 +113,19 @@ def compare(name: str, path: Path, radius: float | None, relative: float, chains
           flush=True)
 
 
-def compare_files(name: str, path: Path, radius: float | None, relative: float) -> None:
+def compare_files(name: str, path: Path, radius: float | None, relative: float, sample: int | None = None,
+                  one_around: bool = False) -> None:
     """The whole file as a user meshes it: ``cgamesh FILE --tolerance D`` against the smallest
     ``--around M --subdivide K`` whose every tube and sphere is within D (one resolution for the
     whole file, as the command takes it). Spheres: a UV sphere of M around is within D of its
     sphere when r deviation_bound(M) <= D (cgamesh.meshing.junctions), so M is at least what the
     largest sphere needs; tubes: each tube's uniform grid measured (cgamesh.meshing.deviation),
     K the fewest reaching D on every tube, by doubling and bisection, for each M among the
-    tolerance plans' counts around (and the spheres' floor); the fewest vertices win. Times:
-    CPU, one run each of mesh_centerlines (no file written), with one BLAS thread."""
+    sag's count around (1.25, 1.5 and 2 times it, at least the spheres' floor); the fewest
+    vertices win. Times: CPU, one run each of mesh_centerlines (no file written), with one BLAS thread. ``sample``:
+    K searched on the N tubes whose grids stray most at --subdivide 0 only (every tube costs
+    minutes at the resolutions involved): a lower bound of K, so the ratios printed are upper
+    bounds of the true ones. ``one_around``: only the first M (the smallest of them)."""
     from cgamesh.centerline_tolerance import spheres_around
     from cgamesh.meshing.deviation import CIRCLES, grid_deviation
 
@@ -144,21 +149,28 @@ def compare_files(name: str, path: Path, radius: float | None, relative: float) 
     floor = int(spheres_around(sphere_radii, tolerance).max()) if len(sphere_radii) else 3
     widest = max(max(c.radius for c in spec.controls) for spec in specs)
     sag = int(np.ceil(np.pi / (2.0 * np.arcsin(np.sqrt(0.5 * tolerance / widest)))))  # r (1 - cos(pi / M)) <= D
-    candidates = sorted({max(floor, int(np.ceil(f * sag))) for f in (1.25, 1.5, 2.0)})
-    order = list(range(len(specs)))  # the tube that failed last is measured first
+    candidates = sorted({max(floor, int(np.ceil(f * sag))) for f in (1.25, 1.5, 2.0)})[:1 if one_around else None]
 
-    def reaches(around: int, subdivide: int) -> bool:
-        for position, k in enumerate(order):
-            segments = surfaces[k].segment_count
-            rings = segments * (subdivide + 1) + 1
-            _, grid, t = uniform_grid(surfaces[k], specs[k], around, rings)
-            if grid_deviation(surfaces[k], t, grid, CIRCLES).max > tolerance:
-                order.insert(0, order.pop(position))
-                return False
-        return True
+    def deviation(k: int, around: int, subdivide: int) -> float:
+        rings = surfaces[k].segment_count * (subdivide + 1) + 1
+        _, grid, t = uniform_grid(surfaces[k], specs[k], around, rings)
+        return grid_deviation(surfaces[k], t, grid, CIRCLES).max
 
     best = None
     for around in candidates:
+        # the tubes measured: all, or the ``sample`` that stray most at --subdivide 0 (then K is a
+        # lower bound of the smallest uniform resolution, and the ratios printed upper bounds)
+        order = list(range(len(specs)))
+        if sample is not None and sample < len(specs):
+            order = list(np.argsort([-deviation(k, around, 0) for k in order])[:sample])
+
+        def reaches(around: int, subdivide: int) -> bool:
+            for position, k in enumerate(order):
+                if deviation(k, around, subdivide) > tolerance:
+                    order.insert(0, order.pop(position))  # the tube that failed last is measured first
+                    return False
+            return True
+
         low, high = -1, 1  # reaches(around, low) is False (or low = -1), reaches(around, high) is True
         while not reaches(around, high):
             low, high = high, 2 * high + 1
@@ -176,8 +188,11 @@ def compare_files(name: str, path: Path, radius: float | None, relative: float) 
         if best is None or uniform_vertices < best[2]:
             best = (around, high, uniform_vertices, uniform_seconds)
     around, subdivide, uniform_vertices, uniform_seconds = best
+    bound = "" if sample is None or sample >= len(specs) else (
+        f" (K measured on the {sample} of {len(specs)} tubes that stray most at --subdivide 0: at most the "
+        "smallest uniform resolution, so these ratios are upper bounds)")
     print(f"  smallest uniform: --around {around} --subdivide {subdivide}; vertices ratio "
-          f"{vertices / uniform_vertices:.2f}, time ratio {seconds / uniform_seconds:.2f}", flush=True)
+          f"{vertices / uniform_vertices:.2f}, time ratio {seconds / uniform_seconds:.2f}{bound}", flush=True)
 
 
 def main() -> None:
@@ -187,14 +202,17 @@ def main() -> None:
     parser.add_argument("--whole", action="store_true", help="every chain of each file")
     parser.add_argument("--files", action="store_true",
                         help="whole files as the command meshes them, against one uniform resolution (compare_files)")
+    parser.add_argument("--one-around", action="store_true", help="with --files: only the smallest M tried")
+    parser.add_argument("--sample", type=int, default=None,
+                        help="with --files: search the resolution on the N tubes that stray most (a bound, faster)")
     args = parser.parse_args()
     chains = None if args.whole else args.chains
     from realdata_files import fornix, smallest_neuron
 
     neuron = smallest_neuron()
     if args.files:
-        compare_files(f"navis neuron {neuron.stem}", neuron, None, args.relative)
-        compare_files("dipy fornix", fornix(), 0.5, args.relative)
+        compare_files(f"navis neuron {neuron.stem}", neuron, None, args.relative, args.sample, args.one_around)
+        compare_files("dipy fornix", fornix(), 0.5, args.relative, args.sample, args.one_around)
         return
     compare(f"navis neuron {neuron.stem}", neuron, None, args.relative, chains)
     compare("dipy fornix", fornix(), 0.5, args.relative, chains)
