@@ -175,6 +175,11 @@ def surface_bytes(kind: str, around: int, along: int, caps: bool = False, tangen
     return held, peak
 
 
+def output_suffixes(outputs) -> list[str]:
+    """The extensions of ``outputs`` (file names, or extensions already), as export_bytes takes them."""
+    return [("." + str(o).rsplit(".", 1)[-1]) if "." in str(o) else str(o) for o in outputs]
+
+
 def export_bytes(suffixes, vertices: int, tangents: bool = False) -> int:
     """The most any one of the outputs (written one after another) allocates for ``vertices``."""
     per_vertex = max((EXPORT_PER_VERTEX.get(s.lower(), max(EXPORT_PER_VERTEX.values())) for s in suffixes),

@@ -161,10 +161,6 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     chains, junctions = _chains(lines)
     _check_scale(lines, points, chains)
     soma = lines.kinds == SOMA if lines.kinds is not None else np.zeros(len(points), dtype=bool)
-    if options.tolerance is not None:  # refused before any tube is meshed, not after
-        from cgamesh import centerline_tolerance as to_tolerance
-
-        to_tolerance.check_sphere_resolution(lines, radii, junctions, soma, options)
     tangents = np.zeros_like(points)
     tangents[:, 2] = 1.0
     segment_of = np.full(len(points), SOMA_SEGMENT)
@@ -172,11 +168,14 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     stem = _mesh_name(lines.source)
     planned = None
     if options.tolerance is not None:  # every chain planned, the whole run priced, then meshed
-        price = to_tolerance.TolerancePrice(lines, options.tolerance, max_memory, outputs)
+        from cgamesh import centerline_tolerance as to_tolerance
+
+        # the spheres first: one that cannot meet the tolerance is refused before any tube is planned
+        sphere_vertices, sphere_triangles = to_tolerance.sphere_size(lines, radii, junctions, soma, options)
+        price = to_tolerance.TolerancePrice(lines, options.tolerance, max_memory, outputs, sphere_vertices)
         planned = to_tolerance.plan_tubes(chains, points, radii, soma, tangents, segment_of, lines, options, stem,
                                           skipped, progress, price)
-        sphere_vertices, sphere_triangles = to_tolerance.sphere_size(radii, junctions, soma, options)
-        price.finish(sphere_vertices)
+        price.finish()
     merging = not options.split and not options.watertight
     pieces: list[SurfaceMesh] = []
     if merging:  # each piece goes into the merged arrays as it is made (cgamesh.meshing.merge)
@@ -554,6 +553,22 @@ def _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, optio
     vertices and values are its own)."""
     from cgamesh.meshing.junctions import sphere_bands
 
+    for name, nodes, sphere_radii, around in sphere_groups(junctions, soma, radii, options):
+        for count in np.flatnonzero(np.bincount(around)):  # the counts present (np.unique imports numpy.ma)
+            chosen = np.flatnonzero(around == count)
+            per_sphere = (count + 1) * (sphere_bands(int(count)) + 1)
+            step = len(chosen) if block is None else max(1, block // per_sphere)
+            for start in range(0, len(chosen), step):
+                part = chosen[start:start + step]
+                mesh = _sphere_mesh(name, nodes[part], sphere_radii[part], int(count), points, radii, scalar,
+                                    tangents, segment_of, options, stem)
+                yield from _split_spheres(mesh, len(part)) if options.watertight else [mesh]
+
+
+def sphere_groups(junctions, soma, radii, options: TubeOptions) -> Iterator[tuple]:
+    """(name, nodes, radii, counts around) of the junction and of the soma spheres, those that
+    exist: the radii enclosing the tubes' rings when watertight, the counts ``options.around``
+    or, under a tolerance, each sphere's own (cgamesh.centerline_tolerance.spheres_around)."""
     for name, nodes in (("junctions", junctions[~soma[junctions]]), ("soma", np.flatnonzero(soma))):
         if not len(nodes):
             continue
@@ -564,15 +579,7 @@ def _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, optio
             from cgamesh.centerline_tolerance import spheres_around
 
             around = spheres_around(sphere_radii, options.tolerance)
-        for count in np.flatnonzero(np.bincount(around)):  # the counts present (np.unique imports numpy.ma)
-            chosen = np.flatnonzero(around == count)
-            per_sphere = (count + 1) * (sphere_bands(int(count)) + 1)
-            step = len(chosen) if block is None else max(1, block // per_sphere)
-            for start in range(0, len(chosen), step):
-                part = chosen[start:start + step]
-                mesh = _sphere_mesh(name, nodes[part], sphere_radii[part], int(count), points, radii, scalar,
-                                    tangents, segment_of, options, stem)
-                yield from _split_spheres(mesh, len(part)) if options.watertight else [mesh]
+        yield name, nodes, sphere_radii, around
 
 
 def _sphere_mesh(name, group, sphere_radii, around, points, radii, scalar, tangents, segment_of, options,

@@ -1,9 +1,10 @@
 """Centreline inputs meshed to a tolerance: every chain planned, the whole run priced, then meshed.
 
 Each chain's tube is planned by the tolerance's a priori bound (cgamesh.meshing.tolerance_plan)
-before any mesh is made, and priced as it is planned (``TolerancePrice``): the merged mesh, the
-largest meshing transient and the largest export against the memory budget, refused as soon as
-the chains so far exceed it, with about the tolerance that would fit. The junction and soma
+before any mesh is made, and priced as it is planned (``TolerancePrice``, the spheres' vertices
+counted first): the merged mesh, the largest meshing transient and the largest export against
+the memory budget, refused as soon as the spheres and the chains so far exceed it, with about
+the tolerance that would fit. The junction and soma
 spheres get the fewest vertices around that keep them within the tolerance (``spheres_around``,
 cgamesh.meshing.junctions.deviation_bound; docs/tolerance.md, "Junction and soma spheres").
 Then the chains are meshed from their plans, each plan let go once its mesh is made.
@@ -16,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.centerline_pipeline import (Centerlines, TubeOptions, _Chain, _junction_scale, _take, _tube_finish,
-                                         _tube_spec, _TubeSpec)
+from cgamesh.centerline_pipeline import (Centerlines, TubeOptions, _Chain, _take, _tube_finish, _tube_spec,
+                                         _TubeSpec, sphere_groups)
 from cgamesh.errors import CgameshError, InvalidInputError
 
 
@@ -62,19 +63,25 @@ class TolerancePrice:
     export of ``outputs``; refused (ResourceLimitError) as soon as it exceeds the budget, with
     about the tolerance that would fit (cgamesh.meshing.tolerance_budget.fitting_tolerance)."""
 
-    def __init__(self, lines: Centerlines, tolerance: float, max_memory, outputs: Sequence[str]):
+    def __init__(self, lines: Centerlines, tolerance: float, max_memory, outputs: Sequence[str],
+                 sphere_vertices: int):
         from cgamesh import budget as costs
 
         self.budget = costs.Budget.of(max_memory)
         self.where = f"{lines.source} with tolerance {tolerance:g}"
         self.tolerance = tolerance
-        self.suffixes = [("." + str(o).rsplit(".", 1)[-1]) if "." in str(o) else str(o) for o in outputs]
+        self.suffixes = costs.output_suffixes(outputs)
+        self.spheres = sphere_vertices
         self.vertices = self.tubes = 0
         self.transient = 0
+        if not self.budget.allows(self.needed(0)):  # the spheres alone: refused before any tube is planned
+            self._refuse(self.needed(0), f"junction and soma spheres meshed to it (about {sphere_vertices} vertices)")
 
     def needed(self, vertices: int) -> int:
+        """Bytes of a run of ``vertices`` tube vertices and the spheres."""
         from cgamesh import budget as costs
 
+        vertices += self.spheres
         return costs.HELD_PER_VERTEX * vertices + max(self.transient, costs.export_bytes(self.suffixes, vertices))
 
     def add(self, plan, share: float) -> None:
@@ -82,26 +89,20 @@ class TolerancePrice:
         self.vertices += plan.vertices
         self.tubes += 1
         self.transient = max(self.transient, plan.peak - plan.held)
-        now = self.needed(self.vertices)
-        if not self.budget.allows(now):
-            whole = self.needed(int(self.vertices / max(share, 1e-12)))  # the rest like the chains so far
-            self._refuse(whole, f"tubes meshed to it (about {int(self.vertices / max(share, 1e-12))} vertices, "
-                                f"extrapolated from the first {self.tubes} tubes planned)")
+        if not self.budget.allows(self.needed(self.vertices)):
+            whole = int(self.vertices / max(share, 1e-12))  # the rest like the chains so far
+            self._refuse(self.needed(whole), f"tubes and spheres meshed to it (about {whole + self.spheres} "
+                                             f"vertices, extrapolated from the first {self.tubes} tubes planned)")
 
-    def finish(self, sphere_vertices: int) -> None:
-        """The whole run, its spheres with it."""
-        vertices = self.vertices + sphere_vertices
-        self._refuse(self.needed(vertices), f"tubes and spheres meshed to it ({self.tubes} tubes, about "
-                                            f"{vertices} vertices)")
+    def finish(self) -> None:
+        """The whole run, every tube planned."""
+        self._refuse(self.needed(self.vertices), f"tubes and spheres meshed to it ({self.tubes} tubes, about "
+                                                 f"{self.vertices + self.spheres} vertices)")
 
     def _refuse(self, needed: int, what: str) -> None:
-        from cgamesh.meshing.tolerance_budget import fitting_tolerance
+        from cgamesh.meshing.tolerance_budget import fitting_advice
 
-        def advice(limit):
-            fitting = fitting_tolerance(self.tolerance, needed, limit)
-            return None if fitting is None else f"a tolerance of about {fitting:.2g} would fit"
-
-        self.budget.require(needed, self.where, what, advice)
+        self.budget.require(needed, self.where, what, fitting_advice(self.tolerance, needed))
 
 
 def mesh_planned_tubes(planned: list[PlannedTube], scalar, options, stem, skipped, progress, sink) -> None:
@@ -130,40 +131,32 @@ def _around(plan) -> int:
     return plan.prepared.counts.around if plan.prepared is not None else plan.around
 
 
-def sphere_size(radii, junctions, soma, options) -> tuple[int, int]:
-    """Vertices and triangles of the junction and soma spheres at their counts around for the tolerance."""
+def sphere_size(lines: Centerlines, radii, junctions, soma, options: TubeOptions) -> tuple[int, int]:
+    """Vertices and triangles of the junction and soma spheres at their counts around for the
+    tolerance; a located InvalidInputError when a sphere cannot be meshed to it."""
     from cgamesh.meshing.junctions import sphere_bands
 
-    sphere_radii = np.concatenate([radii[junctions[~soma[junctions]]] * _junction_scale(options), radii[soma]])
-    if not len(sphere_radii):
-        return 0, 0
-    spheres = np.bincount(spheres_around(sphere_radii, options.tolerance))
-    counts = np.flatnonzero(spheres)  # the counts present (np.unique imports numpy.ma)
-    spheres = spheres[counts]
-    bands = np.array([sphere_bands(int(m)) for m in counts])
-    return int(((counts + 1) * (bands + 1) * spheres).sum()), int((2 * counts * (bands - 1) * spheres).sum())
-
-
-def check_sphere_resolution(lines: Centerlines, radii: np.ndarray, junctions: np.ndarray, soma: np.ndarray,
-                             options: TubeOptions) -> None:
-    """A located InvalidInputError when a junction or soma sphere cannot be meshed to the tolerance."""
-    largest = max([radii[junctions[~soma[junctions]]].max(initial=0.0) * _junction_scale(options),
-                   radii[soma].max(initial=0.0)])
-    if largest > 0.0:
-        try:
-            spheres_around(np.array([largest]), options.tolerance)
-        except InvalidInputError as error:
-            raise InvalidInputError(f"{lines.source}: {error}") from None
+    vertices = triangles = 0
+    try:
+        for _, _, _, around in sphere_groups(junctions, soma, radii, options):
+            spheres = np.bincount(around)
+            counts = np.flatnonzero(spheres)  # the counts present (np.unique imports numpy.ma)
+            bands = np.array([sphere_bands(int(m)) for m in counts])
+            vertices += int(((counts + 1) * (bands + 1) * spheres[counts]).sum())
+            triangles += int((2 * counts * (bands - 1) * spheres[counts]).sum())
+    except InvalidInputError as error:
+        raise InvalidInputError(f"{lines.source}: {error}") from None
+    return vertices, triangles
 
 
 def spheres_around(radii: np.ndarray, tolerance: float) -> np.ndarray:
     """Per sphere the fewest vertices around whose UV sphere lies within ``tolerance`` of it
     (cgamesh.meshing.junctions.around_within), from one table of the bound over the counts up to
-    the largest sphere's. InvalidInputError when a sphere needs more than MAX_TABLE_AROUND."""
-    from cgamesh.meshing.junctions import MAX_TABLE_AROUND, around_within, deviation_bound
+    the largest sphere's. InvalidInputError when a sphere needs more than junctions.MAX_AROUND."""
+    from cgamesh.meshing.junctions import around_within, deviation_bound
 
     try:
-        largest = around_within(float(radii.max()), tolerance, limit=MAX_TABLE_AROUND)
+        largest = around_within(float(radii.max()), tolerance)
     except ValueError as error:
         raise InvalidInputError(f"tolerance {tolerance:g} is too small for the junction and soma spheres: "
                                 f"{error}") from None

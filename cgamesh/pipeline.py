@@ -60,17 +60,12 @@ def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
 
 
 def _fitting(tolerance: float | None, needed: float):
-    """For a refusal of a tolerance run needing ``needed`` bytes: the advice of about the
-    tolerance that would fit a limit (tolerance_budget.fitting_tolerance); None at a fixed resolution."""
+    """A refusal's advice of about the tolerance that would fit; None at a fixed resolution."""
     if tolerance is None:
         return None
-    from cgamesh.meshing.tolerance_budget import fitting_tolerance
+    from cgamesh.meshing.tolerance_budget import fitting_advice
 
-    def advice(limit):
-        fitting = fitting_tolerance(tolerance, needed, limit)
-        return None if fitting is None else f"a tolerance of about {fitting:.2g} would fit"
-
-    return advice
+    return fitting_advice(tolerance, needed)
 
 
 @dataclass(frozen=True)
@@ -198,8 +193,8 @@ def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lam
         budget.require(plan.peak, plan.where, plan.what, _fitting(plan.tolerance, plan.peak))
     held = sum(plan.held for plan in plans)
     vertices = sum(plan.vertices for plan in plans)
-    suffixes = [("." + str(o).rsplit(".", 1)[-1]) if "." in str(o) else str(o) for o in outputs]
-    transient = max([plan.peak - plan.held for plan in plans] + [costs.export_bytes(suffixes, vertices, tangents)])
+    transient = max([plan.peak - plan.held for plan in plans]
+                    + [costs.export_bytes(costs.output_suffixes(outputs), vertices, tangents)])
     # one tolerance for every surface (--tolerance): the whole scene scales with it
     shared = resolution.tolerance if all(plan.tolerance is not None for plan in plans) else None
     budget.require(held + transient, f"{scene.path}", f"meshes and exports ({len(plans)} surfaces, "

@@ -21,11 +21,9 @@ import numpy as np
 from cgamesh.meshing.mesh import SurfaceMesh
 
 
-# The most vertices around a sphere meshed to a tolerance (as the tubes' planner allows), and
-# the most a run's table of bounds (one per count, centerline_pipeline.spheres_around) holds: a
-# sphere of 4,096 around already has 8.4 million vertices.
-MAX_AROUND = 1 << 16
-MAX_TABLE_AROUND = 4096
+# The most vertices around a sphere meshed to a tolerance (a sphere of 4,096 around already has
+# 8.4 million vertices).
+MAX_AROUND = 4096
 
 
 def sphere_bands(around: int) -> int:

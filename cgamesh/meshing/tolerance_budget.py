@@ -78,3 +78,14 @@ def fitting_tolerance(tolerance: float, needed: float, limit: float, fixed: floa
     if limit <= fixed or needed <= fixed:
         return None
     return tolerance * (needed - fixed) / (limit - fixed) * FIT_MARGIN
+
+
+def fitting_advice(tolerance: float, needed: float):
+    """The advice a refusal of a tolerance run needing ``needed`` bytes gives for a limit
+    (cgamesh.budget.Budget.require): about the tolerance that would fit, or None."""
+
+    def advice(limit):
+        fitting = fitting_tolerance(tolerance, needed, limit)
+        return None if fitting is None else f"a tolerance of about {fitting:.2g} would fit"
+
+    return advice
