@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import cgamesh.pipeline
+from direction_strategies import direction
 from cgamesh.budget import ResourceLimitError
 from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
 from cgamesh.centerline_tolerance import spheres_around
@@ -135,3 +136,29 @@ def test_a_tolerance_run_far_over_the_budget_is_refused_early(tmp_path):
         mesh_centerlines(read_centerlines(str(source)), TubeOptions(tolerance=1e-5), max_memory="40M",
                          progress=lambda label, count=1: labels.append(label))
     assert 0 < len(labels) < 40
+
+
+@settings(max_examples=int(os.environ.get("CGAMESH_PROPERTY_EXAMPLES", "40")) // 4 or 1, deadline=None)
+@given(first=direction, second=direction, scale=st.sampled_from([1e-3, 1.0, 1e3]),
+       radii=st.tuples(st.floats(0.2, 1.0), st.floats(0.05, 0.2), st.floats(0.05, 0.2)),
+       relative=st.sampled_from([1e-2, 1e-3]))
+def test_every_sphere_of_a_random_tree_is_within_the_tolerance(first, second, scale, radii, relative, tmp_path_factory):
+    """A soma node and a branch node with two children in random directions (the exact axes
+    among them), at sizes from 1e-3 to 1e3: each sphere's triangles lie within the tolerance."""
+    first, second = np.asarray(first, float), np.asarray(second, float)
+    first, second = first / np.linalg.norm(first), second / np.linalg.norm(second)
+    soma, junction = radii[0] * scale, radii[1] * scale
+    branch = np.array([4.0, 0.0, 0.0]) * scale
+    rows = [f"1 1 0 0 0 {soma!r} -1", f"2 3 {2.0 * scale!r} 0 0 {junction!r} 1",
+            f"3 3 {float(branch[0])!r} 0 0 {junction!r} 2"]
+    for k, d in enumerate((first, second)):
+        tip = (branch + 3.0 * scale * d).tolist()
+        rows.append(f"{4 + k} 3 {tip[0]!r} {tip[1]!r} {tip[2]!r} {radii[2] * scale!r} 3")
+    source = tmp_path_factory.mktemp("tree") / "tree.swc"
+    source.write_text("\n".join(rows) + "\n")
+    tolerance = relative * scale
+    built = mesh_centerlines(read_centerlines(str(source)), TubeOptions(tolerance=tolerance, split=True))
+    spheres = {mesh.name.rsplit("_", 1)[-1]: mesh for mesh in built.meshes
+               if mesh.name.endswith(("_junctions", "_soma"))}
+    assert sphere_deviation(spheres["soma"], np.zeros(3), soma) <= tolerance
+    assert sphere_deviation(spheres["junctions"], branch, junction) <= tolerance
