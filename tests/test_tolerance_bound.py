@@ -268,7 +268,7 @@ def test_the_plans_transport_is_the_meshers(seed, count, wobble):
     """The plan's quaternion transport (cgamesh.meshing.dense_transport) carries the same frames
     as the mesher's rotors (circles.transported_frames), to rounding: normals that wander,
     exact axes and turns back (a normal followed by its opposite) included."""
-    from cgamesh.meshing.circles import transported_frames
+    from cgamesh.meshing.ring_frames import transported_frames
     from cgamesh.meshing.dense_transport import transported_axes
 
     rng = np.random.default_rng(seed)

@@ -23,13 +23,11 @@ import numpy as np
 
 from cgamesh.meshing import normals as normal_field
 from cgamesh.meshing import uv as uv_map
-from cgamesh.geometry.algebra import rotors
 from cgamesh.errors import DegenerateGeometryError
 from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.meshing.ring_frames import transported_frames
 from cgamesh.geometry.surface import CircleRings, EvolvedSurface
 
-E1 = np.array([1.0, 0.0, 0.0])
-E3 = np.array([0.0, 0.0, 1.0])
 # A ring moving slower than this fraction of its radius per unit alpha is stationary (e.g. a
 # Kochanek-Bartels control with tension 1): its normals come from just past it.
 STATIONARY_FRACTION = 1e-9
@@ -49,28 +47,6 @@ OUTWARD_TRUST = 0.25
 # Consecutive rings whose vertices all lie within this fraction of the surface's size of each
 # other are one ring (float32, as output files store positions, resolves about 6e-8).
 DISTINCT_RING_FRACTION = 1e-6
-
-
-def transported_frames(normal: np.ndarray, closed: bool, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """In-plane unit axes u, v (K, 3) of each ring, carried from ring to ring by TRS rotations.
-
-    For a closed loop, the rotation accumulated around the loop (its holonomy) is spread
-    evenly along it, so the last ring's axes equal the first's.
-    """
-    steps = np.concatenate(
-        [rotors.rotation_between(E3, normal[:1]), rotors.rotation_between(normal[:-1], normal[1:])]
-    )
-    accumulated = rotors.prefix_products(steps, rotors.EUCLIDEAN_ROTOR_BLADES, unit=True)
-    u = rotors.apply_to_euclidean(accumulated, np.broadcast_to(E1, normal.shape))
-    u -= np.einsum("ki,ki->k", u, normal)[:, None] * normal
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
-    v = np.cross(normal, u)
-    if closed:
-        twist = np.arctan2(np.dot(np.cross(u[0], u[-1]), normal[0]), np.dot(u[0], u[-1]))
-        angle = -twist * (t - t[0]) / (t[-1] - t[0])
-        u = np.cos(angle)[:, None] * u + np.sin(angle)[:, None] * v
-        v = np.cross(normal, u)
-    return u, v
 
 
 @dataclass(frozen=True)

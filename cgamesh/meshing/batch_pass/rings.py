@@ -19,8 +19,8 @@ import numpy as np
 
 from cgamesh.meshing import normals as normal_field
 from cgamesh.meshing.batch_pass.circle_rows import CircleRows
-from cgamesh.meshing.batch_pass.frames import transported_axes
 from cgamesh.meshing.batch_pass.motions import ChainMotions
+from cgamesh.meshing.ring_frames import transported_axes
 from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, FOLD_AGREEMENT, NEAR_ZERO_FRACTION, OUTWARD_TRUST, STATIONARY_FRACTION,
                                      RingNormals, fold_screen, frame_values, ring_steps, turned_pairs)
 
@@ -147,7 +147,7 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     rings = _BladeRings.of(state, origin[ring_chain], scale[ring_chain])
     del state, segment
 
-    u, v = transported_axes(rings.normal, ring_local)  # circles.transported_frames, open chains
+    u, v = transported_axes(rings.normal, ring_local)
     fallback |= _coincident_rings(rings, ring_chain, chains)
 
     field = RingNormals.of(rings, u, v)

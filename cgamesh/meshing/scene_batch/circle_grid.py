@@ -23,16 +23,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.geometry.algebra import rotors
 from cgamesh.geometry.algebra.layout import grade_indices
 from cgamesh.geometry.algebra import products
 from cgamesh.geometry.objects import circle_euclidean
 from cgamesh.geometry.surface import carried_velocity
 from cgamesh.meshing import normals as normal_field
-from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, E1, E3, FOLD_AGREEMENT, NEAR_ZERO_FRACTION,
+from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, FOLD_AGREEMENT, NEAR_ZERO_FRACTION,
                                      OUTWARD_TRUST, STATIONARY_FRACTION, STATIONARY_OFFSET, _grid_weld, _wound_grid,
                                      _add_cap, drop_zero_area, frame_values, ring_steps, turned_pairs)
 from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.meshing.ring_frames import close_loops, transported_axes
 
 # An outward estimate or sum this close (relative) to its decision threshold is recomputed the
 # per-surface way, whose summation order may differ from the batched one in the last bits.
@@ -46,37 +46,6 @@ class _SurfaceRings:
     centre: np.ndarray
     normal: np.ndarray
     radius: np.ndarray
-
-
-def _transported_frames(normal: np.ndarray, closed: bool, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """circles.transported_frames of every surface, normal (S, K, 3) -> u, v (S, K, 3)."""
-    count, rings, _ = normal.shape
-    steps = np.empty((rings, count, 32))
-    steps[0] = rotors.rotation_between(E3, normal[:, 0])
-    steps[1:] = rotors.rotation_between(np.swapaxes(normal[:, :-1], 0, 1).reshape(-1, 3),
-                                        np.swapaxes(normal[:, 1:], 0, 1).reshape(-1, 3)).reshape(rings - 1, count, 32)
-    # rotors.prefix_products along each surface's rings (axis 0), all surfaces in one product
-    blades = rotors.EUCLIDEAN_ROTOR_BLADES
-    acc = steps
-    shift = 1
-    while shift < rings:
-        acc[shift:] = products.geometric(acc[shift:].reshape(-1, 32), acc[:-shift].reshape(-1, 32), blades, blades,
-                                         blades).reshape(rings - shift, count, 32)
-        shift *= 2
-    accumulated = np.swapaxes(rotors.renormalise(acc.reshape(-1, 32), blades).reshape(rings, count, 32), 0, 1)
-    flat_normal = normal.reshape(-1, 3)
-    u = rotors.apply_to_euclidean(accumulated.reshape(-1, 32), np.broadcast_to(E1, flat_normal.shape))
-    u -= np.einsum("ki,ki->k", u, flat_normal)[:, None] * flat_normal
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
-    v = np.cross(flat_normal, u)
-    u, v = u.reshape(normal.shape), v.reshape(normal.shape)
-    if closed:
-        for s in range(count):  # np.dot's fused sums, as the per-surface mesher takes them
-            twist = np.arctan2(np.dot(np.cross(u[s, 0], u[s, -1]), normal[s, 0]), np.dot(u[s, 0], u[s, -1]))
-            angle = -twist * (t - t[0]) / (t[-1] - t[0])
-            u[s] = np.cos(angle)[:, None] * u[s] + np.sin(angle)[:, None] * v[s]
-            v[s] = np.cross(normal[s], u[s])
-    return u, v
 
 
 def _ring_fields(centre, normal, radius, omega, u, v, row_origin, row_scale):
@@ -156,8 +125,9 @@ def mesh_circle_group(names, sampler, origin: np.ndarray, scale: np.ndarray, clo
     fine = ok & _distinct(centre.reshape(by_surface + (3,)), normal.reshape(by_surface + (3,)),
                           radius.reshape(by_surface), scale)
 
-    u, v = _transported_frames(normal.reshape(by_surface + (3,)), closed, t)
-    u, v = u.reshape(-1, 3), v.reshape(-1, 3)
+    u, v = transported_axes(normal, np.tile(np.arange(along), count))
+    if closed:
+        close_loops(u, v, normal, np.tile(t, count), np.arange(count) * along, np.full(count, along))
 
     points, radial, velocity, sampled, speed, frame, raw = _ring_fields(centre, normal, radius, omega, u, v,
                                                                          row_origin, row_scale)
