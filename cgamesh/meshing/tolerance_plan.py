@@ -40,7 +40,7 @@ import numpy as np
 from cgamesh.errors import InvalidInputError
 from cgamesh.geometry.objects import circle_euclidean
 from cgamesh.geometry.surface import EvolvedSurface
-from cgamesh.meshing.circles import transported_frames
+from cgamesh.meshing.ring_frames import transported_frames
 from cgamesh.meshing.dense_samples import DenseSamples, circle_members, pair_members, read_blades
 from cgamesh.meshing.dense_transport import transported_axes
 from cgamesh.meshing.derivative_bounds import cell_derivatives, lengths, segment_samples

@@ -22,7 +22,7 @@ from cgamesh.budget import BATCHED_CHUNK_RINGS
 from cgamesh.errors import CgameshError
 from cgamesh.meshing.batch_pass.motions import ChainMotions, ChainNodes
 from cgamesh.meshing.batch_pass.rings import TubeArrays, mesh_chains
-from cgamesh.meshing.circles import _grid_weld  # the per-chain mesher's seam weld, shared
+from cgamesh.meshing.circles import grid_weld
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.node_normals import envelope_normals
 
@@ -242,7 +242,7 @@ def _chain_meshes(members, result: TubeArrays, first, count, radii, t, scalar, n
         vs, ve, fs, fe = v_start[lo], v_start[hi + 1], f_start[lo], f_start[hi + 1]
         if options.split:
             faces = result.faces[fs:fe]
-            weld = _grid_weld(vertex_counts[lo] // columns, options.around, False)
+            weld = grid_weld(vertex_counts[lo] // columns, options.around, False)
             name = f"{stem}_{label_name(chains[int(members[lo])].label)}"
             uv_lengths = np.broadcast_to(result.uv_lengths[lo], (ve - vs, 2))
         else:  # each chain's local indices shifted, in place, by its first vertex in the run (per ring pair)
