@@ -137,7 +137,7 @@ class _ChainList:
 
 def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
                      progress: Callable[..., None] = lambda label, count=1: None,
-                     batched: bool = True, as_written: bool = False, max_memory=None,
+                     as_written: bool = False, max_memory=None,
                      outputs: Sequence[str] = ()) -> TubeMeshes:
     """Tubes along every chain of ``lines`` with their junction and soma spheres (see the module).
 
@@ -146,10 +146,9 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     priced against ``max_memory`` (bytes, a size such as "2G", a cgamesh.budget.Budget, or None
     for the default) with the largest export of ``outputs`` (file names or extensions):
     ResourceLimitError, naming about the tolerance that would fit, before any mesh is made.
-    ``batched``: mesh the chains in
-    one vectorised pass (cgamesh.meshing.batch_pass; same meshes within 1e-12 relative) where
-    the options allow it (a fixed resolution, no caps, not watertight); else, or when False,
-    one chain at a time. ``as_written``: a merged mesh holds its normals, colours and the
+    At a fixed resolution without caps the chains are meshed in chunks, every chain of a chunk
+    as rows of the one circle mesher (cgamesh.meshing.batch_pass); under a tolerance, with caps
+    or watertight, one chain at a time. ``as_written``: a merged mesh holds its normals, colours and the
     attributes no colour is made from as the glTF writer stores them, float32
     (cgamesh.meshing.merge; for runs that write only unquantized glTF files, byte for byte the same).
     """
@@ -191,7 +190,7 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
         sink = merged.append
     else:
         sink = pieces.append
-    if batched and uses_batched_pass(options):
+    if uses_batched_pass(options):
         from cgamesh.meshing.batch_pass.chains import tube_pieces
 
         def single(chain, index, tangents_, segment_of_):

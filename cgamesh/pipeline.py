@@ -172,7 +172,7 @@ def _check_uv_scale(mesh: SurfaceMesh, spec: SurfaceSpec) -> None:
 
 def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lambda label: None,
                tangents: bool = False, max_memory=None,
-               outputs: Sequence[str] = (), batched: bool = True) -> list[tuple[SurfaceMesh, Material]]:
+               outputs: Sequence[str] = ()) -> list[tuple[SurfaceMesh, Material]]:
     """Every surface's mesh with its material, in file order; ``progress(name)`` after each.
 
     The UVs are those of each surface's ``uv`` mode (uv.py: natural, none, or one xatlas atlas
@@ -181,13 +181,13 @@ def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lam
     meshing peak, and the largest export of ``outputs`` (their file names or extensions,
     written one after another); ResourceLimitError when it exceeds it.
 
-    ``batched``: the surfaces the batched pass covers (cgamesh.meshing.scene_batch) are meshed
-    there, group by group, with the meshes the per-surface path makes; False meshes every
-    surface alone.
+    Surfaces of one shape of work (cgamesh.meshing.scene_batch) are meshed together, group by
+    group, as rows of the one mesher; the rest (a tolerance, a surface larger than a group's
+    chunk, one whose group could not read it) one by one.
     """
     budget = costs.Budget.of(max_memory)
-    batch = _batched_share(scene.surfaces, resolution, tangents) if batched else None
-    plans = [plan_surface(spec, resolution, tangents, build=batch is None or not batch.takes(i))
+    batch = _batched_share(scene.surfaces, resolution, tangents)
+    plans = [plan_surface(spec, resolution, tangents, build=not batch.takes(i))
              for i, spec in enumerate(scene.surfaces)]
     for plan in plans:
         budget.require(plan.peak, plan.where, plan.what, _fitting(plan.tolerance, plan.peak))
@@ -201,7 +201,7 @@ def mesh_scene(scene: Scene, resolution: Resolution = Resolution(), progress=lam
                    f"about {vertices} vertices)", _fitting(shared, held + transient))
     meshes = []
     for i, plan in enumerate(plans):
-        mesh = batch.mesh(i) if batch is not None and batch.takes(i) else None
+        mesh = batch.mesh(i) if batch.takes(i) else None
         if mesh is None:
             if plan.surface is None:  # left by the batched pass: built and meshed alone
                 plan = plan_surface(plan.spec, resolution, tangents)

@@ -1,10 +1,13 @@
-"""The batched meshing pass gives the per-chain path's meshes (cgamesh.meshing.batch_pass).
+"""Centreline tubes meshed chunk by chunk as rows of the one circle mesher (cgamesh.meshing.batch_pass).
 
-Measured agreement (documented in docs/real-data.md): positions, UVs, faces, welds,
-attributes, colours computed from them and the skipped lines are bit for bit those of the
-per-chain path; normals (and the direction colours, made from node tangents) within 1e-12
-(measured: a few units in the last place, at most 7.3e-16, from the order in which BLAS
-sums the trigonometric fit of the normal field over arrays of different sizes).
+Two kinds of check on every input below. Against the definition of a tube: every node ring is
+the node's circle (centre on the node, the node's radius, a planar ring), every ring between
+two nodes has a radius within theirs (the radius spline is monotone on a span), normals are
+unit, orthogonal to their ring and wound with the triangles; the skipped chains are named.
+Invariance: a chain meshed among many gets the mesh it gets alone (every chain its own chunk)
+-- positions, UVs, faces, welds, attributes and the skipped lines bit for bit, normals (and
+the direction colours) within 1e-12 (a few units in the last place, from the order in which
+BLAS sums the trigonometric fit of the normal field over arrays of different sizes).
 """
 
 from __future__ import annotations
@@ -26,9 +29,65 @@ NORMAL_TOLERANCE = 1e-12
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def alone(lines, options: TubeOptions):
+    """The tubes with every chain in a chunk of its own (a batch of one)."""
+    from cgamesh.meshing.batch_pass import chains as batch_chains
+
+    saved = batch_chains.CHUNK_RINGS
+    batch_chains.CHUNK_RINGS = 1
+    try:
+        return mesh_centerlines(lines, options)
+    finally:
+        batch_chains.CHUNK_RINGS = saved
+
+
+def assert_true_tubes(lines, options: TubeOptions) -> None:
+    """Every tube of a split run (one mesh per chain, the spheres apart) checked against the
+    definition of a tube of the nodes it names (module doc)."""
+    from dataclasses import replace
+
+    built = mesh_centerlines(lines, replace(options, split=True, color_by="none"))
+    columns = options.around + 1
+    points = lines.points if options.up != "x" else lines.points[:, [1, 2, 0]]
+    for mesh in built.meshes:
+        if mesh.name.endswith(("_junctions", "_soma")):
+            continue
+        rings = mesh.positions.reshape(-1, columns, 3)[:, :-1]
+        centre = rings.mean(axis=1)
+        radius = np.linalg.norm(rings - centre[:, None], axis=2)
+        size = np.abs(rings).max() + radius.max()
+        assert np.all(np.ptp(radius, axis=1) <= 1e-9 * size), mesh.name  # on circles
+        normal = np.cross(rings[:, 1] - rings[:, 0], rings[:, 2] - rings[:, 0])
+        normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+        assert np.all(np.abs(np.einsum("kmi,ki->km", rings - centre[:, None], normal)) <= 1e-9 * size)  # planar
+        node_radii = mesh.attributes["radius"].reshape(-1, columns)[:, 0]  # the nodes' radii, linear between
+        step = options.subdivide + 1
+        if len(rings) % step == 1 % step:  # every ring kept: one on every node
+            np.testing.assert_allclose(radius[::step, 0], node_radii[::step], rtol=1e-9, atol=1e-12 * size)
+            nodes = centre[::step]
+            distance = np.linalg.norm(nodes[:, None, :] - points[None, :, :], axis=2).min(axis=1)
+            assert np.all(distance <= 1e-9 * size), mesh.name  # node rings centred on nodes
+            low = np.minimum(node_radii[::step][:-1], node_radii[::step][1:])
+            high = np.maximum(node_radii[::step][:-1], node_radii[::step][1:])
+            span = np.arange(len(rings) - 1) // step
+            assert np.all(radius[:-1, 0] >= low[span] * (1 - 1e-9)) and np.all(radius[:-1, 0] <= high[span] * (1 + 1e-9))
+        unit = mesh.normals.reshape(-1, columns, 3)[:, :-1]
+        np.testing.assert_allclose(np.linalg.norm(unit, axis=2), 1.0, atol=1e-12)
+        around_tangent = np.roll(rings, -1, axis=1) - np.roll(rings, 1, axis=1)
+        # orthogonal to the ring to O(h^2): the chord between the two neighbours of a vertex
+        cosine = np.einsum("kmi,kmi->km", unit, around_tangent) / np.linalg.norm(around_tangent, axis=2)
+        assert np.all(np.abs(cosine) <= 1e-9), mesh.name
+        corners = mesh.positions[mesh.faces]
+        geometric = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        with_normals = np.einsum("ti,ti->t", geometric, mesh.normals[mesh.faces].sum(axis=1)) >= 0.0
+        assert with_normals.mean() >= 0.99, mesh.name
+
+
 def assert_same(lines, options: TubeOptions) -> None:
-    one = mesh_centerlines(lines, options, batched=False)
-    many = mesh_centerlines(lines, options, batched=True)
+    """The tubes are tubes of their nodes, and a chain meshed among many gets the mesh it gets alone."""
+    assert_true_tubes(lines, options)
+    one = alone(lines, options)
+    many = mesh_centerlines(lines, options)
     assert many.skipped == one.skipped
     assert len(many.meshes) == len(one.meshes)
     for a, b in zip(many.meshes, one.meshes):
@@ -136,8 +195,8 @@ def test_random_polylines(polylines, radius, color_by, split):
     2-node chains, turns back."""
     lines = _polylines(polylines)
     try:
-        mesh_centerlines(lines, TubeOptions(radius=radius), batched=False)
-    except Exception:  # nothing meshable: both paths must refuse alike
+        alone(lines, TubeOptions(radius=radius))
+    except Exception:  # nothing meshable: meshed together it is refused alike
         with pytest.raises(Exception):
             mesh_centerlines(lines, TubeOptions(radius=radius))
         return

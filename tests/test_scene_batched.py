@@ -1,8 +1,9 @@
-"""The batched pass for scene files (cgamesh.meshing.scene_batch) makes the per-surface path's meshes.
+"""A surface of a scene file meshed among many (cgamesh.meshing.scene_batch: surfaces of one shape
+of work as rows of the one mesher) gets the mesh it gets alone, a scene of its own.
 
 Equality is bit for bit: positions, normals, UVs, faces, tangents, UV lengths, welds and colours
-of every surface are compared with ``np.array_equal`` against ``mesh_scene(..., batched=False)``,
-which meshes each surface alone. Checked on every example scene (its own resolution, and
+of every surface are compared with ``np.array_equal`` against each surface meshed as a scene of
+its own (a batch of one). Checked on every example scene (its own resolution, and
 --around / --along overrides, with and without tangents), on scenes of random tubes (the
 benchmark's, whose low vertex counts around put nearly every ring on the fold path), and on
 random scenes of several surfaces sharing and not sharing a shape of work (every curve kind,
@@ -10,7 +11,7 @@ blade and motor interpolation, open and closed, with caps or not, aligned or not
 the exact axes, sizes from 1e-3 to 1e3, far from the origin, through circles, repeated controls;
 point-pair ribbons among them, blade interpolated, 2 to 16 vertices across), and on scenes of
 random ribbons (the benchmark's).
-Where the per-surface path refuses a scene, the batched path refuses it with the same message.
+Where a surface alone is refused, the scene is refused with the same message.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from direction_strategies import coordinate, direction, sphere_direction
 
 from cgamesh.errors import CgameshError
 from cgamesh.inputs.scene import load_scene, parse_scene
-from cgamesh.pipeline import Resolution, _batched_share, mesh_scene
+from cgamesh.pipeline import Resolution, _batched_share, mesh_scene, plan_surface
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = sorted((ROOT / "examples").glob("*.yaml"))
@@ -68,14 +69,26 @@ def batched_count(scene, resolution=Resolution(), tangents=False) -> int:
     return sum(1 for i in range(len(scene.surfaces)) if share.takes(i) and share.mesh(i) is not None)
 
 
+def mesh_alone(scene, resolution=Resolution(), tangents=False):
+    """Every surface meshed as a scene of its own, after every surface is planned (as a scene
+    plans all its surfaces before meshing any): a scene's refusal is its first surface's."""
+    from dataclasses import replace
+
+    for spec in scene.surfaces:
+        plan_surface(spec, resolution, tangents, build=False)
+    return [mesh for spec in scene.surfaces
+            for mesh in mesh_scene(replace(scene, surfaces=(spec,)), resolution, tangents=tangents)]
+
+
 def mesh_both(scene, resolution=Resolution(), tangents=False):
-    """(per-surface meshes or the error, batched meshes or the error), numpy warnings as errors."""
+    """(each surface's mesh alone or the error, the scene's meshes or the error), numpy warnings
+    as errors."""
     results = []
-    for batched in (False, True):
+    for mesh in (mesh_alone, mesh_scene):
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             try:
-                results.append(mesh_scene(scene, resolution, tangents=tangents, batched=batched))
+                results.append(mesh(scene, resolution, tangents=tangents))
             except CgameshError as error:
                 results.append(error)
     return results

@@ -14,7 +14,7 @@ from cgamesh.errors import CgameshError
 from cgamesh.inputs.scene import parse_scene
 from cgamesh.pipeline import Resolution, mesh_scene, mesh_surface
 
-from test_scene_batched import batched_count
+from test_scene_batched import batched_count, mesh_alone
 
 AXES = [np.eye(3)[i] * sign for i in range(3) for sign in (1.0, -1.0)]
 
@@ -60,11 +60,11 @@ def test_a_closed_tube_of_three_rings_winds_with_its_normals():
     assert against_normals("cgamesh: 1\nsurfaces:\n" + closed_three_ring_tube()) == 0
 
 
-def test_the_batched_scene_pass_winds_turned_strips_as_the_per_surface_mesher():
+def test_a_scene_winds_turned_strips_as_each_surface_alone():
     scene = parse_scene("cgamesh: 1\nsurfaces:\n" + closed_three_ring_tube("a") + closed_three_ring_tube("b", 3.0),
                         "scene.yaml")
-    alone, batched = (mesh_scene(scene, Resolution(), batched=flag) for flag in (False, True))
-    assert batched_count(scene) == 2  # both went through the batched pass
+    alone, batched = mesh_alone(scene), mesh_scene(scene, Resolution())
+    assert batched_count(scene) == 2  # both meshed together
     for (a, _), (b, _) in zip(alone, batched):
         assert np.array_equal(a.faces, b.faces) and np.array_equal(a.positions, b.positions)
         assert np.array_equal(a.normals, b.normals)
@@ -85,14 +85,14 @@ def test_a_closed_folding_ribbon_winds_with_its_normals():
 
 
 @pytest.mark.parametrize("closed", ["true", "false"])
-def test_the_batched_scene_pass_winds_turned_ribbon_quads_as_the_per_surface_mesher(closed):
-    """Two copies of the folding ribbon, one shifted: the batched scene pass meshes them as the
-    per-surface mesher does, every triangle with its normals."""
+def test_a_scene_winds_turned_ribbon_quads_as_each_surface_alone(closed):
+    """Two copies of the folding ribbon, one shifted: meshed together, each gets the mesh it gets
+    alone, every triangle with its normals."""
     first = ribbon(FOLDING_RIBBON, closed=closed, around=7, along=40)
     shifted = [(tuple(np.add(a, (0.0, 5.0, 0.0))), tuple(np.add(b, (0.0, 5.0, 0.0)))) for a, b in FOLDING_RIBBON]
     second = ribbon(shifted, closed=closed, around=7, along=40)
     scene = parse_scene(first + second[second.index("  - name:"):].replace("name: s", "name: t"), "scene.yaml")
-    alone, batched = (mesh_scene(scene, Resolution(), batched=flag) for flag in (False, True))
+    alone, batched = mesh_alone(scene), mesh_scene(scene, Resolution())
     for (a, _), (b, _) in zip(alone, batched):
         assert np.array_equal(a.faces, b.faces) and np.array_equal(a.normals, b.normals)
         corners = b.positions[b.faces]
@@ -107,16 +107,16 @@ POINT = st.tuples(*[st.floats(-2.0, 2.0, allow_nan=False).map(lambda x: round(x,
           suppress_health_check=[HealthCheck.too_slow])
 @given(controls=st.lists(st.tuples(POINT, POINT), min_size=3, max_size=4), closed=st.sampled_from(["true", "false"]),
        around=st.integers(2, 4), along=st.integers(3, 6))
-def test_coarse_ribbons_wind_with_their_normals_batched_or_alone(controls, closed, around, along):
+def test_coarse_ribbons_wind_with_their_normals_together_or_alone(controls, closed, around, along):
     """Few rulings of a random ribbon: consecutive ones are often turned far apart. Every
-    triangle winds with its normals, and the batched scene pass meshes as the per-surface one."""
+    triangle winds with its normals, and each surface meshed among others as it is alone."""
     text = ribbon(controls, closed=closed, around=around, along=along)
     try:
         scene = parse_scene(text + text[text.index("  - name:"):].replace("name: s", "name: t"), "scene.yaml")
-        alone = mesh_scene(scene, Resolution(), batched=False)
+        alone = mesh_alone(scene)
     except CgameshError:
         return  # a refused scene (a point pair of one point, a vanishing ruling) has no triangles to wind
-    batched = mesh_scene(scene, Resolution(), batched=True)
+    batched = mesh_scene(scene, Resolution())
     for (a, _), (b, _) in zip(alone, batched):
         assert np.array_equal(a.faces, b.faces) and np.array_equal(a.normals, b.normals)
         corners = a.positions[a.faces]
