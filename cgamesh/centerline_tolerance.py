@@ -1,6 +1,6 @@
 """Centreline inputs meshed to a tolerance: every chain planned, the whole run priced, then meshed.
 
-Each chain's tube is planned by the tolerance's a priori bound (cgamesh.meshing.tolerance_plan)
+Each chain's tube is planned by the tolerance's a priori bound (cgamesh.meshing.tolerance.tolerance_plan)
 before any mesh is made, and priced as it is planned (``TolerancePrice``, the spheres' vertices
 counted first): the merged mesh, the largest meshing transient and the largest export against
 the memory budget, refused as soon as the spheres and the chains so far exceed it, with about
@@ -61,7 +61,7 @@ class TolerancePrice:
     """What a tolerance run of centrelines will hold and allocate, summed as its chains are
     planned: the merged mesh's bytes, the largest meshing transient of one tube and the largest
     export of ``outputs``; refused (ResourceLimitError) as soon as it exceeds the budget, with
-    about the tolerance that would fit (cgamesh.meshing.tolerance_budget.fitting_tolerance)."""
+    about the tolerance that would fit (cgamesh.meshing.tolerance.tolerance_budget.fitting_tolerance)."""
 
     def __init__(self, lines: Centerlines, tolerance: float, max_memory, outputs: Sequence[str],
                  sphere_vertices: int):
@@ -100,7 +100,7 @@ class TolerancePrice:
                                                  f"{self.vertices + self.spheres} vertices)")
 
     def _refuse(self, needed: int, what: str) -> None:
-        from cgamesh.meshing.tolerance_budget import fitting_advice
+        from cgamesh.meshing.tolerance.tolerance_budget import fitting_advice
 
         self.budget.require(needed, self.where, what, fitting_advice(self.tolerance, needed))
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from export_checks import pxr_or_skip
-from cgamesh.meshing.deviation import circle_read_out
+from cgamesh.meshing.tolerance.deviation import circle_read_out
 from cgamesh.export.registry import write
 from cgamesh.pipeline import Resolution, build_surface, mesh_scene
 from cgamesh.readers.readback import read_gltf

@@ -1,8 +1,8 @@
-"""The a priori tolerance bound (cgamesh.meshing.tolerance_plan) is never exceeded.
+"""The a priori tolerance bound (cgamesh.meshing.tolerance.tolerance_plan) is never exceeded.
 
 Property tests over random tubes and ribbons (every curve kind, sizes and positions at the
 extremes' ranges of tests/test_extremes.py): the plan's bound is at most the tolerance, and the
-deviation measured by cgamesh.meshing.deviation on the mesh made on the plan's rings is at most
+deviation measured by cgamesh.meshing.tolerance.deviation on the mesh made on the plan's rings is at most
 the bound. Also: the derivative bounds cover analytic derivatives; impossible tolerances are
 refused with an InvalidInputError, quickly; the planned counts are those the plan uses.
 """
@@ -21,10 +21,10 @@ from cgamesh.errors import InvalidInputError
 from cgamesh.inputs.scene import Location, PointPairControl, SurfaceSpec
 from cgamesh.material import Material
 from cgamesh.meshing.circles import mesh_circle_surface
-from cgamesh.meshing.derivative_bounds import cell_bounds, segment_samples
-from cgamesh.meshing.deviation import CIRCLES, SEGMENTS, grid_deviation
+from cgamesh.meshing.tolerance.derivative_bounds import cell_bounds, segment_samples
+from cgamesh.meshing.tolerance.deviation import CIRCLES, SEGMENTS, grid_deviation
 from cgamesh.meshing.ribbons import mesh_ribbon_surface
-from cgamesh.meshing.tolerance_plan import plan_counts, plan_tolerance
+from cgamesh.meshing.tolerance.tolerance_plan import plan_counts, plan_tolerance
 from cgamesh.pipeline import build_surface
 from test_extremes import spec_of, tube
 
@@ -34,7 +34,7 @@ CURVES = ["linear", "bezier", "kb", "catmull_rom", "rational_bezier"]
 
 
 def measured(surface, plan, kind: str) -> float:
-    """cgamesh.meshing.deviation's figure for the mesh on the plan's rings."""
+    """cgamesh.meshing.tolerance.deviation's figure for the mesh on the plan's rings."""
     if kind == "point_pairs":
         mesh = mesh_ribbon_surface(surface, plan.around, t=plan.t)
         return grid_deviation(surface, plan.t, mesh.positions.reshape(plan.rings, plan.around, 3), SEGMENTS).max
@@ -46,7 +46,7 @@ def measured(surface, plan, kind: str) -> float:
 def placed_terms(surface, tolerance: float, kind: str, closed: bool = False):
     """(plan, cells, table, names, error, terms) of the plan placed for ``tolerance``: each
     interval's bound and its terms, as the plan prices them (tolerance_plan's private tables)."""
-    from cgamesh.meshing import tolerance_plan
+    from cgamesh.meshing.tolerance import tolerance_plan
 
     prepared = tolerance_plan.PreparedPlan(surface, tolerance, kind, closed)
     plan = prepared.place()
@@ -120,11 +120,11 @@ def random_ribbon(log_scale, distance, curve, count, twist, flat, seed):
        seed=st.integers(0, 2**32 - 1))
 def test_the_ribbon_twist_bound_covers_every_interval_alone(log_scale, distance, curve, count, twist, flat,
                                                            log_relative, seed):
-    """The ribbon bound without the twist's tangential part (cgamesh.meshing.ribbon_twist), taken
+    """The ribbon bound without the twist's tangential part (cgamesh.meshing.tolerance.ribbon_twist), taken
     alone, is at least each interval's measured deviation wherever it applies, on random flat
     and twisted ribbons (the plan's bound is the smaller of two, so the end-to-end tests would
     not notice one that fails), and the plan's bound is that minimum."""
-    from cgamesh.meshing.ribbon_twist import ribbon_twist_error
+    from cgamesh.meshing.tolerance.ribbon_twist import ribbon_twist_error
 
     surface = random_ribbon(log_scale, distance, curve, count, twist, flat, seed)
     plan, _, _, _, error, terms = placed_terms(surface, 10.0**log_relative * surface.frame.scale, "point_pairs")
@@ -145,7 +145,7 @@ def test_a_flat_ribbons_twist_is_tangent():
     without the tangential part is the smaller one on most intervals at 1e-4 (83% of them, with 11
     across: enough for the bubble's shift, kappa |gamma_t|, to be small)."""
     from cgamesh.inputs.scene import load_scene
-    from cgamesh.meshing.ribbon_twist import ribbon_twist_error
+    from cgamesh.meshing.tolerance.ribbon_twist import ribbon_twist_error
 
     spec = load_scene("examples/fig12_cocircular_chords.yaml").surfaces[0]
     surface = build_surface(spec)
@@ -212,11 +212,11 @@ def test_tilted_flaring_tube_bound_is_never_exceeded(log_scale, distance, curve,
        log_relative=st.floats(-3.0, -1.5), seed=st.integers(0, 2**32 - 1))
 def test_the_normal_projection_bounds_every_interval_alone(log_scale, distance, curve, count, tilt, flare,
                                                           log_relative, seed):
-    """The bound by the error normal to the surface (cgamesh.meshing.normal_projection), taken
+    """The bound by the error normal to the surface (cgamesh.meshing.tolerance.normal_projection), taken
     alone, is at least each interval's measured deviation wherever it applies: the plan's bound
     is the smallest of three, so the end-to-end tests above would not notice one that fails."""
-    from cgamesh.meshing import tolerance_plan
-    from cgamesh.meshing.normal_projection import normal_projection_error
+    from cgamesh.meshing.tolerance import tolerance_plan
+    from cgamesh.meshing.tolerance.normal_projection import normal_projection_error
 
     centres, normals, radii, weights = tilted_flaring_tube(log_scale, distance, curve, count, tilt, flare, seed)
     surface = build_surface(spec_of(centres, normals, radii, curve=curve, weights=weights))
@@ -235,12 +235,12 @@ def test_the_normal_projection_bounds_every_interval_alone(log_scale, distance, 
 def test_the_error_normal_to_the_surface_is_what_bounds_tubes(path, twist_share, normal_share):
     """On tubes whose circles are about perpendicular to their path, the bounds that drop the
     twist's tangential part (the bubble reparametrisation, and the projection on the surface's
-    normal, cgamesh.meshing.normal_projection) are the smaller ones on most intervals, so the
+    normal, cgamesh.meshing.tolerance.normal_projection) are the smaller ones on most intervals, so the
     rings follow them (measured at 1e-3: the normal projection on 91% of closed_loop's intervals,
     81% of kb_tube's); an interval's bound is the smallest of the three, exactly."""
     from cgamesh.inputs.scene import load_scene
-    from cgamesh.meshing import tolerance_plan
-    from cgamesh.meshing.normal_projection import normal_projection_error
+    from cgamesh.meshing.tolerance import tolerance_plan
+    from cgamesh.meshing.tolerance.normal_projection import normal_projection_error
 
     spec = load_scene(path).surfaces[0]
     surface = build_surface(spec)

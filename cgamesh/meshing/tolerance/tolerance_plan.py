@@ -11,14 +11,14 @@ of the true surface, where sag is the chord sag around (r (1 - cos(pi / M)) for 
 straight rulings), A bounds |d^2 x / dt^2| and B |d^2 x / dt dtheta| over the quad (the twist
 term) and k' the chord's length per unit of r (2 sin(pi / M)) or the fraction across (1 / (N - 1)).
 A and B come from bounds of the members' derivatives per cell of a dense sampling
-(cgamesh.meshing.derivative_bounds): for circles |c''|, |r'|, |r''|, |n'|, |n''| and the
+(cgamesh.meshing.tolerance.derivative_bounds): for circles |c''|, |r'|, |r''|, |n'|, |n''| and the
 frame's angular velocity; for ribbons |a''|, |b''| and |(b - a)'|. For circles two more bounds
 count only the twist's part across the surface: a reparametrisation of each triangle removes
 its shear along P_t and P_theta (docs/tolerance.md, "The twist's normal part"), and the error
 is projected on the surface's normal, its tangential part costing only the curvature over a
-short step (cgamesh.meshing.normal_projection): an interval's E is the smallest of the three.
+short step (cgamesh.meshing.tolerance.normal_projection): an interval's E is the smallest of the three.
 For ribbons the bubble removes the twist's tangential part, or only the rulings' stretching
-(cgamesh.meshing.ribbon_twist): E is the smallest of the lemma's and those.
+(cgamesh.meshing.tolerance.ribbon_twist): E is the smallest of the lemma's and those.
 
 From these, per cell and for each candidate count around, the spacing h whose bound meets the
 tolerance gives a ring density 1 / h; its integral per segment is the ring count, so the count
@@ -41,12 +41,12 @@ from cgamesh.errors import InvalidInputError
 from cgamesh.geometry.objects import circle_euclidean
 from cgamesh.geometry.surface import EvolvedSurface
 from cgamesh.meshing.circles import transported_frames
-from cgamesh.meshing.dense_samples import DenseSamples, circle_members, pair_members, read_blades
+from cgamesh.meshing.tolerance.dense_samples import DenseSamples, circle_members, pair_members, read_blades
 from cgamesh.meshing.dense_transport import transported_axes
-from cgamesh.meshing.derivative_bounds import cell_derivatives, lengths, segment_samples
-from cgamesh.meshing.normal_projection import (full_second_derivatives, normal_projection_error,
+from cgamesh.meshing.tolerance.derivative_bounds import cell_derivatives, lengths, segment_samples
+from cgamesh.meshing.tolerance.normal_projection import (full_second_derivatives, normal_projection_error,
                                                normal_projection_spacing, spin_bounds)
-from cgamesh.meshing.ribbon_twist import ribbon_twist_error, ribbon_twist_spacing, ribbon_twist_terms
+from cgamesh.meshing.tolerance.ribbon_twist import ribbon_twist_error, ribbon_twist_spacing, ribbon_twist_terms
 
 # Cells per segment of the derivative sampling: at least this many, and about this many per
 # ring of a first estimate (the Lipschitz margin shrinks with the cells; the cost grows).
@@ -217,7 +217,7 @@ def _circle_error(terms: dict, h, around, rate: float, wide: dict | None = None)
     plus a closed loop's holonomy rate): x(t, theta) = x_G(t, theta + psi(t)) adds
     2 B psi' + r (psi'^2 + |psi''|) to A and r psi' to B. With ``wide`` (the maxima over each
     interval widened within its segment), the bound by the error normal to the surface
-    (cgamesh.meshing.normal_projection) is a third one: E is the smallest."""
+    (cgamesh.meshing.tolerance.normal_projection) is a third one: E is the smallest."""
     n1, rm = terms["N1"], terms["Rm"]
     turned = h * n1  # bounds |n(t) - n(t_k)| over the interval
     spin, spin_rate = spin_bounds(n1, terms["N2"], turned, rate)
@@ -278,7 +278,7 @@ def _normal_twist_terms(terms: dict, around, a, b, spin, spin_rate):
 
 def _ribbon_error(terms: dict, h, across, rate: float = 0.0):
     """E of ribbon quads: the lemma's bound, or the one without the twist's tangential part
-    (cgamesh.meshing.ribbon_twist) where that is smaller."""
+    (cgamesh.meshing.tolerance.ribbon_twist) where that is smaller."""
     full = terms["A"] * h * h / 8.0 + terms["B"] * h / (4.0 * (across - 1))
     return np.minimum(full, ribbon_twist_error(terms, h, across))
 
