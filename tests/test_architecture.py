@@ -97,7 +97,6 @@ KNOWN_INPUTS_IMPORTS: set[tuple[str, str]] = {
 KNOWN_LONG_MODULES: dict[str, str] = {
     "cgamesh.centerline_pipeline": "the tube builders move to a module of their own",
     "cgamesh.inputs.scene": "to be split by concern",
-    "cgamesh.meshing.tolerance.tolerance_plan": "to be split by concern",
 }
 
 

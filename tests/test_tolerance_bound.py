@@ -239,7 +239,7 @@ def test_the_error_normal_to_the_surface_is_what_bounds_tubes(path, twist_share,
     rings follow them (measured at 1e-3: the normal projection on 91% of closed_loop's intervals,
     81% of kb_tube's); an interval's bound is the smallest of the three, exactly."""
     from cgamesh.inputs.scene import load_scene
-    from cgamesh.meshing.tolerance import tolerance_plan
+    from cgamesh.meshing.tolerance import quad_bounds, tolerance_plan
     from cgamesh.meshing.tolerance.normal_projection import normal_projection_error
 
     spec = load_scene(path).surfaces[0]
@@ -254,7 +254,7 @@ def test_the_error_normal_to_the_surface_is_what_bounds_tubes(path, twist_share,
     a = terms["A"] + 2.0 * terms["B"] * spin + terms["Rm"] * (spin * spin + spin_rate)
     b = terms["B"] + terms["Rm"] * spin
     whole = sag + a * h * h / 8.0 + b * h * np.sin(np.pi / plan.around) / 2.0
-    twist = sag + tolerance_plan._normal_twist_error(terms, h, plan.around, a, b, spin, spin_rate)
+    twist = sag + quad_bounds.normal_twist_error(terms, h, plan.around, a, b, spin, spin_rate)
     wide = tolerance_plan._widened(cells, table, names, plan.t)
     normal = normal_projection_error(terms, wide, h, plan.around, cells.closed_rate)
     assert np.all(error == np.minimum(np.minimum(whole, twist), normal))

@@ -9,6 +9,7 @@ rings; nothing is measured on the way. Internal: the pipelines call ``tessellati
     tessellation.py       the entry points: a circle surface or a ribbon meshed to a tolerance
     tolerance_budget.py   the floor under a tolerance, its a priori price, the tolerance that fits
     tolerance_plan.py     the counts around / across and the ring placement (PreparedPlan)
+    quad_bounds.py        the bound of a quad per interval of rings, and the spacing meeting it
     derivative_bounds.py  bounds of a curve's derivatives over each cell of a dense sampling
     dense_samples.py      the surface read at the plan's samplings, each parameter once
     normal_projection.py  a circle quad's bound counting only the error normal to the surface
