@@ -41,7 +41,8 @@ from report_accuracy import smallest_uniform, tolerance_mesh_deviation, uniform_
 from timing import best_of  # noqa: E402
 
 import cgamesh.pipeline as pipeline  # noqa: E402
-from cgamesh.centerline_pipeline import SOMA, TubeOptions, _chains, mesh_centerlines  # noqa: E402
+from cgamesh.centerline_pipeline import SOMA, TubeOptions, mesh_centerlines  # noqa: E402
+from cgamesh.pipelines.chains import split_chains  # noqa: E402
 from cgamesh.errors import CgameshError  # noqa: E402
 from cgamesh.inputs.centerlines import read_centerlines  # noqa: E402
 from cgamesh.meshing.tolerance.tolerance_plan import plan_tolerance  # noqa: E402
@@ -126,7 +127,7 @@ def compare_files(name: str, path: Path, radius: float | None, relative: float, 
     K searched on the N tubes whose grids stray most at --subdivide 0 only (every tube costs
     minutes at the resolutions involved): a lower bound of K, so the ratios printed are upper
     bounds of the true ones. ``one_around``: only the first M (the smallest of them)."""
-    from cgamesh.centerline_tolerance import spheres_around
+    from cgamesh.pipelines.spheres import spheres_around
     from cgamesh.meshing.tolerance.deviation import CIRCLES, grid_deviation
 
     lines = read_centerlines(str(path))
@@ -143,7 +144,7 @@ def compare_files(name: str, path: Path, radius: float | None, relative: float, 
 
     specs = tube_specs(path, tolerance_options)
     surfaces = [build_surface(spec) for spec in specs]
-    chains, junctions = _chains(lines)
+    chains, junctions = split_chains(lines)
     soma = lines.kinds == SOMA if lines.kinds is not None else np.zeros(len(lines.points), dtype=bool)
     sphere_radii = np.concatenate([radii[junctions[~soma[junctions]]], radii[soma]])
     floor = int(spheres_around(sphere_radii, tolerance).max()) if len(sphere_radii) else 3

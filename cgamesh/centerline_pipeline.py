@@ -17,57 +17,26 @@ tube, and colours computed from them (cgamesh.meshing.colors).
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from cgamesh.errors import CgameshError, DegenerateGeometryError, InvalidInputError
+from cgamesh.errors import DegenerateGeometryError, InvalidInputError
 from cgamesh.inputs.centerlines import Centerlines
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
-from cgamesh.meshing.node_normals import envelope_normals
+from cgamesh.pipelines.chains import Chain, ChainList, split_chains, take_chain
+from cgamesh.pipelines.spheres import SOMA_SEGMENT, sphere_meshes
+from cgamesh.pipelines.tube_options import COLOR_MODES, UP_AXES, TubeOptions
+from cgamesh.pipelines.tubes import finish_tube, label_name, tube_spec
 
-UP_AXES = ("x", "y", "z")
-COLOR_MODES = ("none", "radius", "direction", "segment")  # or the name of a per-point scalar
 SOMA = 1  # SWC structure type
-SOMA_SEGMENT = -1.0  # the ``segment`` attribute of soma spheres
 # Sphere vertices meshed at a time when they are merged (182 spheres of 45 vertices at 8 around:
 # about 1.2 MB with their attributes, where a neuron's 600 junctions at once took 4 MB on top of
 # the merged mesh; under a tolerance a sphere can have tens of thousands).
 SPHERE_BLOCK_VERTICES = 1 << 13
-
-
-@dataclass(frozen=True)
-class TubeOptions:
-    """How centrelines become tubes (the command line's real-data options).
-
-    radius:     a constant radius for every node (required when the input has no radii; it
-                replaces the file's radii when given).
-    min_radius: radii below it are raised to it (a radius of 0 is an error without it).
-    up:         which axis of the input points up: x, y or z.
-    around:     vertices around every tube and sphere (>= 3).
-    subdivide:  rings between consecutive nodes (>= 0); or ``tolerance``, a largest distance
-                from the true surface in the input's units, instead.
-    color_by:   none | radius | direction | segment | the name of a per-point scalar.
-    split:      one mesh per chain or streamline (and one for the spheres) instead of one mesh.
-    watertight: one closed 2-manifold mesh (capped tubes, spheres and soma united).
-    caps:       close every tube's ends with flat discs (implied by ``watertight``).
-    strict:     a chain that cannot be meshed is an error instead of being skipped.
-    """
-
-    radius: float | None = None
-    min_radius: float | None = None
-    up: str = "z"
-    around: int = 8
-    subdivide: int = 3
-    tolerance: float | None = None
-    color_by: str = "none"
-    split: bool = False
-    watertight: bool = False
-    strict: bool = False
-    caps: bool = False
 
 
 @dataclass(frozen=True)
@@ -88,51 +57,6 @@ class TubeMeshes:
     meters_per_unit: float
     chains: int
     material: Material = field(default_factory=Material)
-
-
-@dataclass(frozen=True)
-class _Chain:
-    label: str
-    line: int | None
-    nodes: np.ndarray
-
-
-@dataclass(frozen=True)
-class _ChainList:
-    """Every chain (or polyline) of an input as one flat index array: chain i's nodes are
-    ``nodes[offsets[i]:offsets[i + 1]]``. No Python object per chain is made up front (a
-    tractogram has tens of thousands); ``chains[i]`` builds one, with the label and file line
-    that messages, per-chain mesh names and progress use, when it is asked for."""
-
-    lines: Centerlines
-    nodes: np.ndarray
-    offsets: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.offsets) - 1
-
-    @property
-    def counts(self) -> np.ndarray:
-        """(M,) nodes of each chain."""
-        return np.diff(self.offsets)
-
-    def __getitem__(self, i: int) -> _Chain:
-        i = int(i)
-        if not 0 <= i < len(self):
-            raise IndexError(i)
-        nodes = self.nodes[self.offsets[i]: self.offsets[i + 1]]
-        lines = self.lines
-        if not lines.is_tree:
-            return _Chain(f"streamline {i}", None, nodes)
-        ids = nodes if lines.ids is None else lines.ids[nodes]
-        word = "nodes" if lines.ids is not None else "points"
-        label = (f"{word} {', '.join(str(int(k)) for k in ids)}" if len(ids) <= 4 else
-                 f"{word} {int(ids[0])}, {int(ids[1])}, ..., {int(ids[-1])} ({len(ids)} {word})")
-        line = int(lines.lines[nodes[1]]) if lines.lines is not None else None
-        return _Chain(label, line, nodes)
-
-    def __iter__(self):
-        return (self[i] for i in range(len(self)))
 
 
 def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
@@ -158,7 +82,7 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     points = lines.points[:, [1, 2, 0]] if options.up == "x" else lines.points  # x up -> z up, a rotation
     up = "y" if options.up == "y" else "z"
     scalar = lines.scalars.get(options.color_by)
-    chains, junctions = _chains(lines)
+    chains, junctions = split_chains(lines)
     _check_scale(lines, points, chains)
     soma = lines.kinds == SOMA if lines.kinds is not None else np.zeros(len(points), dtype=bool)
     tangents = np.zeros_like(points)
@@ -198,7 +122,7 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
             return _tube(chain, index, points, radii, soma, scalar, tangents_, segment_of_, lines, options, stem)
 
         skipped = tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, options, stem,
-                              _label_name, single, progress, sink)
+                              label_name, single, progress, sink)
         chains_loop = []
     elif planned is not None:
         to_tolerance.mesh_planned_tubes(planned, scalar, options, stem, skipped, progress, sink)
@@ -206,11 +130,11 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     else:
         chains_loop = chains
     for index, chain in enumerate(chains_loop):
-        _take(lambda: _tube(chain, index, points, radii, soma, scalar, tangents, segment_of, lines, options, stem),
-              options, skipped, sink)
+        take_chain(lambda: _tube(chain, index, points, radii, soma, scalar, tangents, segment_of, lines, options, stem),
+                   options, skipped, sink)
         progress(chain.label)
     # merged, the spheres go in blocks of SPHERE_BLOCK_VERTICES: consecutive pieces of one group merge to its mesh
-    for sphere in _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem,
+    for sphere in sphere_meshes(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem,
                            block=SPHERE_BLOCK_VERTICES if merging else None):
         sink(sphere)
     if (merged.empty if merging else not pieces):
@@ -220,21 +144,6 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     return TubeMeshes(meshes=tuple(meshes), skipped=tuple(skipped), up=up, units=lines.units,
                       meters_per_unit=lines.meters_per_unit, chains=len(chains),
                       material=Material(color=(1.0, 1.0, 1.0)) if options.color_by != "none" else Material())
-
-
-def _take(make: Callable[[], "SurfaceMesh | list[SurfaceMesh] | None"], options: TubeOptions, skipped: list[str],
-          sink: Callable[[SurfaceMesh], None]) -> None:
-    """Hand the piece or pieces of one chain, ``make()``, to ``sink``; a chain that cannot be
-    meshed is skipped (its reason in ``skipped``), or raises when ``options.strict``."""
-    try:
-        piece = make()
-    except CgameshError as error:
-        if options.strict:
-            raise
-        skipped.append(str(error))
-        return
-    for one in piece if isinstance(piece, list) else [] if piece is None else [piece]:
-        sink(one)
 
 
 def uses_batched_pass(options: TubeOptions) -> bool:
@@ -301,7 +210,7 @@ def _radii(lines: Centerlines, options: TubeOptions) -> np.ndarray:
     return radii
 
 
-def _check_scale(lines: Centerlines, points: np.ndarray, chains: _ChainList) -> None:
+def _check_scale(lines: Centerlines, points: np.ndarray, chains: ChainList) -> None:
     """A located InvalidInputError for the first point whose coordinate or step to the next
     point of its chain (exact duplicates apart: they are merged) is outside [SMALLEST_LENGTH,
     LARGEST_LENGTH] (radii: ``_radii``)."""
@@ -322,293 +231,15 @@ def _check_scale(lines: Centerlines, points: np.ndarray, chains: _ChainList) -> 
                                 f"{step[tiny[0]]:g} to the next point")
 
 
-def _chains(lines: Centerlines) -> tuple[_ChainList, np.ndarray]:
-    """The chains (or streamlines) to mesh, and the junction nodes (none for polylines)."""
-    if lines.is_tree:
-        from cgamesh.inputs.trees import split_tree
-
-        split = split_tree(lines.parents)
-        return _ChainList(lines, split.nodes, split.offsets), split.junctions
-    return (_ChainList(lines, np.arange(len(lines.points), dtype=np.int64), np.asarray(lines.offsets, dtype=np.int64)),
-            np.zeros(0, dtype=np.int64))
-
-
-@dataclass(frozen=True)
-class _TubeSpec:
-    """One chain's tube as a surface spec, with the nodes and ring normals its attributes need."""
-
-    spec: object  # cgamesh.inputs.scene.SurfaceSpec
-    nodes: np.ndarray
-    p: np.ndarray
-    tube_radii: np.ndarray
-    t: np.ndarray
-
-
-def _tube(chain: _Chain, index: int, points, radii, soma, scalar, tangents, segment_of, lines: Centerlines,
+def _tube(chain: Chain, index: int, points, radii, soma, scalar, tangents, segment_of, lines: Centerlines,
           options: TubeOptions, stem: str) -> SurfaceMesh | list[SurfaceMesh] | None:
     """The tube of one chain with its attributes; None for a chain inside the soma alone."""
     from cgamesh.pipeline import Resolution, mesh_surface
 
-    tube = _tube_spec(chain, index, points, radii, soma, tangents, segment_of, lines, options, stem)
+    tube = tube_spec(chain, index, points, radii, soma, tangents, segment_of, lines, options, stem)
     if tube is None:
         return None
-    return _tube_finish(tube, mesh_surface(tube.spec, Resolution()), chain, index, scalar, options, stem)
-
-
-def _tube_spec(chain: _Chain, index: int, points, radii, soma, tangents, segment_of, lines: Centerlines,
-               options: TubeOptions, stem: str) -> _TubeSpec | None:
-    """The surface spec of one chain's tube (its junction tangents and segments noted in
-    ``tangents`` and ``segment_of``); None for a chain inside the soma alone."""
-    from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
-
-    nodes = chain.nodes
-    tube_radii = radii[nodes]
-    inside = soma[nodes]
-    if inside.all():
-        return None  # the soma's spheres stand for it
-    if inside.any():  # a neurite leaving the soma starts with its own radius, not the soma's
-        outside = np.flatnonzero(~inside)
-        nearest = outside[np.abs(np.arange(len(nodes))[:, None] - outside[None, :]).argmin(axis=1)]
-        tube_radii = tube_radii[nearest]
-    where = Location(lines.source, chain.line, chain.label)
-    p = points[nodes]
-    distinct = np.concatenate([[True], np.any(p[1:] != p[:-1], axis=1)])  # exact duplicates merged
-    nodes, p, tube_radii = nodes[distinct], p[distinct], tube_radii[distinct]
-    if len(nodes) < 2:
-        raise DegenerateGeometryError(f"{where}: expected at least two distinct points, got {len(nodes)}")
-    # ring normals: the path's bisectors, turned where a node ring would leave the radius envelope
-    t = envelope_normals(p, tube_radii, node_tangents(p), np.array([0]), np.array([len(p)]))
-    tangents[nodes[-1]] = t[-1]
-    tangents[nodes[0]] = np.where(segment_of[nodes[0]] == SOMA_SEGMENT, t[0], tangents[nodes[0]])
-    segment_of[nodes[-1]] = index
-    segment_of[nodes[0]] = np.where(segment_of[nodes[0]] == SOMA_SEGMENT, index, segment_of[nodes[0]])
-    controls = tuple(
-        CircleControl(center=tuple(c), normal=tuple(n), radius=float(r), through=None, weight=1.0,
-                      location=Location(lines.source, None if lines.lines is None else int(lines.lines[k]),
-                                        f"{chain.label}: {lines.node_name(int(k))}"))
-        for c, n, r, k in zip(p.tolist(), t.tolist(), tube_radii, nodes))
-    along = (len(nodes) - 1) * (options.subdivide + 1) + 1
-    fixed = options.tolerance is None
-    spec = SurfaceSpec(
-        name=f"{stem}_{index}", type="circles", curve="catmull_rom", tension=0.0, bias=0.0, continuity=0.0,
-        closed=False, align=True, controls=controls, around=options.around if fixed else None,
-        along=along if fixed else None, tolerance=options.tolerance, caps=options.watertight or options.caps,
-        material=Material(), location=where, interpolation="motor")
-    return _TubeSpec(spec, nodes, p, tube_radii, t)
-
-
-def _tube_finish(tube: _TubeSpec, mesh: SurfaceMesh, chain: _Chain, index: int, scalar, options: TubeOptions,
-                 stem: str) -> SurfaceMesh | list[SurfaceMesh]:
-    """The chain's mesh checked and given its attributes and colours (or, watertight and
-    folding, its frusta)."""
-    nodes, p, tube_radii, t, where = tube.nodes, tube.p, tube.tube_radii, tube.t, tube.spec.location
-    if not (np.isfinite(mesh.positions).all() and np.isfinite(mesh.normals).all()):
-        raise DegenerateGeometryError(f"{where}: expected a finite mesh, got non-finite vertices or normals")
-    if options.watertight and not (closed_and_oriented(mesh) and rings_in_order(mesh)):
-        # The tube folds over itself (a radius large against its bend): frusta between the nodes
-        # and spheres at the inner nodes stand for it, closed whatever the bend.
-        return _frusta_chain(p, tube_radii, nodes, index, scalar, t, options, f"{stem}_{_label_name(chain.label)}")
-    s = _node_parameter(mesh, len(nodes), options, p)
-    grid = np.arange(len(nodes))
-    attributes = {"radius": np.interp(s, grid, tube_radii), "segment": np.full(mesh.vertex_count, float(index))}
-    if scalar is not None:
-        attributes["scalar"] = np.interp(s, grid, scalar[nodes])
-    colors = None
-    if options.color_by == "direction":
-        from cgamesh.meshing.colors import direction_colors
-
-        along_t = np.stack([np.interp(s, grid, t[:, k]) for k in range(3)], axis=1)
-        colors = direction_colors(along_t)  # any length; a zero one (a turn back) gets NAN_COLOR
-    return _with(mesh, name=f"{stem}_{_label_name(chain.label)}", attributes=attributes, colors=colors)
-
-
-def _frusta_chain(p, tube_radii, nodes, index, scalar, t, options: TubeOptions, name: str) -> list[SurfaceMesh]:
-    """A folding chain as closed pieces: a capped frustum per consecutive node pair and an
-    enclosing sphere at each inner node, with the tube's attributes and colours."""
-    from cgamesh.meshing.frusta import frusta, node_spheres
-
-    pieces = []
-    for k, piece in enumerate(frusta(p, tube_radii, options.around, f"{name}_frustum")):
-        s = np.where(piece.uvs[:, 1] > 0.5, k + 1.0, float(k))  # each end takes its node's values
-        pieces.append((piece, s, np.broadcast_to(p[k + 1] - p[k], (piece.vertex_count, 3))))
-    if len(p) > 2:
-        spheres = node_spheres(p[1:-1], tube_radii[1:-1], options.around, f"{name}_nodes")
-        for k, sphere in enumerate(_split_spheres(spheres, len(p) - 2)):
-            pieces.append((sphere, np.full(sphere.vertex_count, k + 1.0), np.broadcast_to(t[k + 1], (sphere.vertex_count, 3))))
-    grid = np.arange(len(nodes))
-    result = []
-    for piece, s, direction in pieces:
-        attributes = {"radius": np.interp(s, grid, tube_radii), "segment": np.full(piece.vertex_count, float(index))}
-        if scalar is not None:
-            attributes["scalar"] = np.interp(s, grid, scalar[nodes])
-        colors = None
-        if options.color_by == "direction":
-            from cgamesh.meshing.colors import direction_colors
-
-            colors = direction_colors(direction / np.linalg.norm(direction, axis=1, keepdims=True))
-        result.append(_with(piece, attributes=attributes, colors=colors))
-    return result
-
-
-def _split_spheres(mesh: SurfaceMesh, count: int) -> list[SurfaceMesh]:
-    """A mesh of ``count`` equal spheres (``uv_spheres``) as one mesh per sphere: overlapping
-    spheres must enter a union as separate solids, not as one self-overlapping mesh."""
-    per_vertex, per_face = mesh.vertex_count // count, mesh.triangle_count // count
-    out = []
-    for k in range(count):
-        rows = slice(k * per_vertex, (k + 1) * per_vertex)
-        base = k * per_vertex
-        out.append(SurfaceMesh(
-            name=f"{mesh.name}_{k}", positions=mesh.positions[rows], normals=mesh.normals[rows], uvs=mesh.uvs[rows],
-            faces=np.asarray(mesh.faces[k * per_face:(k + 1) * per_face]) - base,
-            weld=None if mesh.weld is None else np.asarray(mesh.weld[rows]) - base,
-            colors=None if mesh.colors is None else mesh.colors[rows],
-            attributes=None if mesh.attributes is None else {n: a[rows] for n, a in mesh.attributes.items()}))
-    return out
-
-
-def closed_and_oriented(mesh: SurfaceMesh) -> bool:
-    """Whether the welded mesh is closed with every edge used once each way (what a boolean
-    union needs); a tube that folds over itself has triangles wound against their neighbours."""
-    weld = mesh.weld if mesh.weld is not None else np.arange(mesh.vertex_count)
-    faces = weld[mesh.faces].astype(np.int64)
-    faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])]
-    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    forward = edges[:, 0] * mesh.vertex_count + edges[:, 1]
-    backward = edges[:, 1] * mesh.vertex_count + edges[:, 0]
-    unique, counts = np.unique(forward, return_counts=True)
-    return bool(np.all(counts == 1) and np.isin(backward, unique).all())
-
-
-def rings_in_order(mesh: SurfaceMesh) -> bool:
-    """Whether each ring of a capped tube's grid (rings of equal size with a repeated seam
-    vertex, then two caps of one ring size each: ``circles._add_cap``) lies wholly ahead of the plane of the ring before it and the
-    one before wholly behind its plane. Where the centreline bends tighter than the radius the
-    inner wall of consecutive rings crosses: the tube is closed and consistently wound, yet
-    its surface passes through itself, and a union of it keeps that self-intersection."""
-    v = mesh.uvs[:, 1]
-    columns = int(np.argmax(v != v[0])) if (v != v[0]).any() else 0
-    grid = mesh.vertex_count - 2 * columns
-    if columns < 4 or grid <= 0 or grid % columns:
-        return False
-    rings = mesh.positions[:grid].reshape(-1, columns, 3)[:, :-1]
-    centre = rings.mean(axis=1)
-    normal = np.cross(rings - centre[:, None], np.roll(rings, -1, axis=1) - centre[:, None]).sum(axis=1)
-    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    ahead = np.einsum("kij,kj->ki", rings[1:] - centre[:-1, None], normal[:-1]).min(axis=1)
-    behind = np.einsum("kij,kj->ki", rings[:-1] - centre[1:, None], normal[1:]).max(axis=1)
-    return bool((ahead > 0.0).all() and (behind < 0.0).all())
-
-
-def node_tangents(p: np.ndarray) -> np.ndarray:
-    """Unit tangents (n, 3) of a polyline of distinct consecutive points: the bisector of the
-    unit chords on either side (one-sided at the ends; the incoming chord where the bisector
-    vanishes, a turn back). This is the direction of the motor tube's centre curve at the node
-    (a chord-length Catmull-Rom spline, docs/interpolation.md section 2), so the node rings stand
-    perpendicular to the path also where consecutive steps differ in length (the central
-    difference p[i+1] - p[i-1] leans towards the longer step)."""
-    forward = np.diff(p, axis=0)
-    unit = forward / np.linalg.norm(forward, axis=1, keepdims=True)
-    t = np.empty_like(p)
-    t[0], t[-1] = unit[0], unit[-1]
-    t[1:-1] = unit[:-1] + unit[1:]
-    length = np.linalg.norm(t, axis=1)
-    back = length <= 1e-12
-    back[[0, -1]] = False
-    t[1:-1][back[1:-1]] = unit[:-1][back[1:-1]]
-    return t / np.linalg.norm(t, axis=1, keepdims=True)
-
-
-def _node_parameter(mesh: SurfaceMesh, count: int, options: TubeOptions, p: np.ndarray) -> np.ndarray:
-    """Each vertex's place along the chain in node units (0 at the first node, count - 1 at the last).
-
-    On a fixed-resolution grid ring k lies at t = k / (K + 1) exactly (rings are spaced evenly
-    in the curve's parameter, one on every node); caps take their end's value. Otherwise
-    (tolerance-driven rings) v, which grows with arc length along the tube, is matched to the
-    nodes' arc length along the polyline.
-    """
-    columns = options.around + 1
-    along = (count - 1) * (options.subdivide + 1) + 1
-    grid = along * columns
-    caps = 2 * columns if options.watertight or options.caps else 0
-    if options.tolerance is None and mesh.vertex_count == grid + caps:
-        s = np.empty(mesh.vertex_count)
-        s[:grid] = np.repeat(np.arange(along) / (options.subdivide + 1), columns)
-        s[grid: grid + caps // 2] = 0.0
-        s[grid + caps // 2:] = count - 1
-        return s
-    length = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
-    return np.interp(np.clip(mesh.uvs[:, 1], 0.0, 1.0) * length[-1], length, np.arange(count))
-
-
-def _spheres(junctions, points, radii, soma, scalar, tangents, segment_of, options, stem,
-             block: int | None = None) -> Iterator[SurfaceMesh]:
-    """The junction spheres and the soma spheres, those that exist: one mesh per group and count
-    around (one count at a fixed resolution; per sphere under a tolerance, ``spheres_around``),
-    its spheres in node order.
-
-    ``block``: the meshes of at most that many vertices (at least one sphere), made one at a time
-    as they are asked for, so a run that merges them never holds more than one block beside the
-    merged mesh (what a merge makes of consecutive blocks is the group's mesh: every sphere's
-    vertices and values are its own)."""
-    from cgamesh.meshing.junctions import sphere_bands
-
-    for name, nodes, sphere_radii, around in sphere_groups(junctions, soma, radii, options):
-        for count in np.flatnonzero(np.bincount(around)):  # the counts present (np.unique imports numpy.ma)
-            chosen = np.flatnonzero(around == count)
-            per_sphere = (count + 1) * (sphere_bands(int(count)) + 1)
-            step = len(chosen) if block is None else max(1, block // per_sphere)
-            for start in range(0, len(chosen), step):
-                part = chosen[start:start + step]
-                mesh = _sphere_mesh(name, nodes[part], sphere_radii[part], int(count), points, radii, scalar,
-                                    tangents, segment_of, options, stem)
-                yield from _split_spheres(mesh, len(part)) if options.watertight else [mesh]
-
-
-def sphere_groups(junctions, soma, radii, options: TubeOptions) -> Iterator[tuple]:
-    """(name, nodes, radii, counts around) of the junction and of the soma spheres, those that
-    exist: the radii enclosing the tubes' rings when watertight, the counts ``options.around``
-    or, under a tolerance, each sphere's own (cgamesh.centerline_tolerance.spheres_around)."""
-    for name, nodes in (("junctions", junctions[~soma[junctions]]), ("soma", np.flatnonzero(soma))):
-        if not len(nodes):
-            continue
-        sphere_radii = radii[nodes] * (_junction_scale(options) if name == "junctions" else 1.0)
-        if options.tolerance is None:
-            around = np.full(len(nodes), options.around)
-        else:
-            from cgamesh.centerline_tolerance import spheres_around
-
-            around = spheres_around(sphere_radii, options.tolerance)
-        yield name, nodes, sphere_radii, around
-
-
-def _sphere_mesh(name, group, sphere_radii, around, points, radii, scalar, tangents, segment_of, options,
-                 stem) -> SurfaceMesh:
-    """UV spheres of ``around`` at the nodes ``group`` with their attributes and colours."""
-    from cgamesh.meshing.junctions import uv_spheres
-
-    mesh = uv_spheres(points[group], sphere_radii, around, name=f"{stem}_{name}")
-    per = mesh.vertex_count // len(group)
-    attributes = {"radius": np.repeat(radii[group], per), "segment": np.repeat(segment_of[group], per)}
-    if name == "soma":
-        attributes["segment"][:] = SOMA_SEGMENT
-    if scalar is not None:
-        attributes["scalar"] = np.repeat(scalar[group], per)
-    colors = None
-    if options.color_by == "direction":
-        from cgamesh.meshing.colors import direction_colors
-
-        colors = direction_colors(np.repeat(tangents[group], per, axis=0))
-    return _with(mesh, attributes=attributes, colors=colors)
-
-
-def _junction_scale(options: TubeOptions) -> float:
-    """The junction spheres' radius over their node's: watertight, they enclose the tubes' rings."""
-    if not options.watertight:
-        return 1.0
-    from cgamesh.meshing.frusta import enclosing_sphere_scale
-
-    return enclosing_sphere_scale(options.around)  # the tubes' rings there lie strictly inside
+    return finish_tube(tube, mesh_surface(tube.spec, Resolution()), chain, index, scalar, options, stem)
 
 
 def _assemble(pieces: list[SurfaceMesh], options: TubeOptions, stem: str) -> list[SurfaceMesh]:
@@ -621,7 +252,7 @@ def _assemble(pieces: list[SurfaceMesh], options: TubeOptions, stem: str) -> lis
     return pieces
 
 
-def _expected_size(chains: _ChainList, junctions: np.ndarray, soma: np.ndarray,
+def _expected_size(chains: ChainList, junctions: np.ndarray, soma: np.ndarray,
                    options: TubeOptions) -> tuple[int, int]:
     """Vertices and triangles of the merged tubes and spheres at a fixed resolution (an upper
     bound: duplicate points merged, chains skipped or inside the soma have fewer); with a
@@ -670,5 +301,3 @@ def _mesh_name(source: str) -> str:
     return stem if re.match(r"[A-Za-z_]", stem) else f"_{stem}"
 
 
-def _label_name(label: str) -> str:
-    return re.sub(r"_+", "_", re.sub(r"[^A-Za-z0-9]", "_", label.split(" (")[0])).strip("_")

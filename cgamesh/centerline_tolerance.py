@@ -4,8 +4,8 @@ Each chain's tube is planned by the tolerance's a priori bound (cgamesh.meshing.
 before any mesh is made, and priced as it is planned (``TolerancePrice``, the spheres' vertices
 counted first): the merged mesh, the largest meshing transient and the largest export against
 the memory budget, refused as soon as the spheres and the chains so far exceed it, with about
-the tolerance that would fit. The junction and soma
-spheres get the fewest vertices around that keep them within the tolerance (``spheres_around``,
+the tolerance that would fit. The junction and soma spheres get the fewest vertices around that
+keep them within the tolerance (cgamesh.pipelines.spheres.spheres_around,
 cgamesh.meshing.junctions.deviation_bound; docs/tolerance.md, "Junction and soma spheres").
 Then the chains are meshed from their plans, each plan let go once its mesh is made.
 """
@@ -17,18 +17,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.centerline_pipeline import (Centerlines, TubeOptions, _Chain, _take, _tube_finish, _tube_spec,
-                                         _TubeSpec, sphere_groups)
 from cgamesh.errors import CgameshError, InvalidInputError
+from cgamesh.inputs.centerlines import Centerlines
+from cgamesh.pipelines.chains import Chain, take_chain
+from cgamesh.pipelines.spheres import sphere_groups
+from cgamesh.pipelines.tube_options import TubeOptions
+from cgamesh.pipelines.tubes import TubeSpec, finish_tube, tube_spec
 
 
 @dataclass
 class PlannedTube:
     """A chain planned under a tolerance: its tube's spec and the plan priced (SurfacePlan)."""
 
-    chain: _Chain
+    chain: Chain
     index: int
-    tube: _TubeSpec
+    tube: TubeSpec
     plan: object
 
 
@@ -43,7 +46,7 @@ def plan_tubes(chains, points, radii, soma, tangents, segment_of, lines, options
     done = np.cumsum(chains.counts)  # nodes planned after each chain
     for index, chain in enumerate(chains):
         try:
-            tube = _tube_spec(chain, index, points, radii, soma, tangents, segment_of, lines, options, stem)
+            tube = tube_spec(chain, index, points, radii, soma, tangents, segment_of, lines, options, stem)
             if tube is not None:
                 planned.append(PlannedTube(chain, index, tube, plan_surface(tube.spec, Resolution())))
         except CgameshError as error:
@@ -111,8 +114,8 @@ def mesh_planned_tubes(planned: list[PlannedTube], scalar, options, stem, skippe
 
     for k, item in enumerate(planned):
         planned[k] = None  # the plan's cells go with it
-        _take(lambda: _tube_finish(item.tube, mesh_planned(item.plan, False), item.chain, item.index, scalar,
-                                   options, stem), options, skipped, sink)
+        take_chain(lambda: finish_tube(item.tube, mesh_planned(item.plan, False), item.chain, item.index, scalar,
+                                       options, stem), options, skipped, sink)
         progress(item.chain.label)
 
 
@@ -147,20 +150,3 @@ def sphere_size(lines: Centerlines, radii, junctions, soma, options: TubeOptions
     except InvalidInputError as error:
         raise InvalidInputError(f"{lines.source}: {error}") from None
     return vertices, triangles
-
-
-def spheres_around(radii: np.ndarray, tolerance: float) -> np.ndarray:
-    """Per sphere the fewest vertices around whose UV sphere lies within ``tolerance`` of it
-    (cgamesh.meshing.junctions.around_within), from one table of the bound over the counts up to
-    the largest sphere's. InvalidInputError when a sphere needs more than junctions.MAX_AROUND."""
-    from cgamesh.meshing.junctions import around_within, deviation_bound
-
-    try:
-        largest = around_within(float(radii.max()), tolerance)
-    except ValueError as error:
-        raise InvalidInputError(f"tolerance {tolerance:g} is too small for the junction and soma spheres: "
-                                f"{error}") from None
-    counts = np.arange(4, largest + 1)
-    # the least bound up to each count: the fewest count meeting a bound is where this first does
-    least = np.minimum.accumulate([deviation_bound(int(m)) for m in counts])
-    return counts[np.searchsorted(-least, -tolerance / radii)]

@@ -170,7 +170,7 @@ def polylines(draw):
 def test_node_rings_lie_on_the_node_circles_for_any_polyline(case):
     """Whatever carries the rings between nodes, every node's ring is its circle; a polyline
     that cannot be meshed is reported, never silently dropped."""
-    from cgamesh.centerline_pipeline import node_tangents
+    from cgamesh.pipelines.tubes import node_tangents
 
     points, radius = case
     meshes = cgamesh.tubes([points], radii=radius, around=6, subdivide=2, split=True)

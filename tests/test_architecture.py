@@ -42,8 +42,6 @@ MAX_LINES = 600
 KNOWN_CYCLES: set[frozenset[str]] = {
     # the scene reader's fast path reads the rule table of the reader, which calls it back
     frozenset({"cgamesh.inputs.scene", "cgamesh.inputs.scene_fast"}),
-    # the tolerance planning of tubes takes the tube builders of the pipeline, which calls it
-    frozenset({"cgamesh.centerline_pipeline", "cgamesh.centerline_tolerance"}),
     # batching (the options tables): manifest.py reads ``from cgamesh import __version__``,
     # and the package's ``__getattr__`` imports cgamesh.batching lazily for ``cgamesh.batch``
     frozenset({"cgamesh", "cgamesh.batching", "cgamesh.batching.engine", "cgamesh.batching.manifest"}),
@@ -55,11 +53,6 @@ KNOWN_CYCLES: set[frozenset[str]] = {
 
 # (b) (importer, private name used, as its full dotted name).
 KNOWN_PRIVATE_USES: set[tuple[str, str]] = {
-    ("cgamesh.centerline_tolerance", "cgamesh.centerline_pipeline._Chain"),
-    ("cgamesh.centerline_tolerance", "cgamesh.centerline_pipeline._TubeSpec"),
-    ("cgamesh.centerline_tolerance", "cgamesh.centerline_pipeline._take"),
-    ("cgamesh.centerline_tolerance", "cgamesh.centerline_pipeline._tube_finish"),
-    ("cgamesh.centerline_tolerance", "cgamesh.centerline_pipeline._tube_spec"),
     ("cgamesh.inputs.scene_fast", "cgamesh.inputs.scene._CIRCLE_KEYS"),
     ("cgamesh.inputs.scene_fast", "cgamesh.inputs.scene._DEGENERATE_RTOL"),
     ("cgamesh.inputs.scene_fast", "cgamesh.inputs.scene._POINT_PAIR_KEYS"),
@@ -95,7 +88,6 @@ KNOWN_INPUTS_IMPORTS: set[tuple[str, str]] = {
 
 # (d) module -> why it is still over MAX_LINES.
 KNOWN_LONG_MODULES: dict[str, str] = {
-    "cgamesh.centerline_pipeline": "the tube builders move to a module of their own",
     "cgamesh.inputs.scene": "to be split by concern",
 }
 

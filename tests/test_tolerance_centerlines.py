@@ -17,7 +17,7 @@ import cgamesh.pipeline
 from direction_strategies import direction
 from cgamesh.budget import ResourceLimitError
 from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
-from cgamesh.centerline_tolerance import spheres_around
+from cgamesh.pipelines.spheres import spheres_around
 from cgamesh.errors import InvalidInputError
 from cgamesh.inputs.centerlines import read_centerlines
 from cgamesh.meshing.junctions import around_within, deviation_bound, uv_spheres
