@@ -40,8 +40,6 @@ MAX_LINES = 600
 
 # (a) cycles, each as the set of modules of one strongly connected component.
 KNOWN_CYCLES: set[frozenset[str]] = {
-    # the scene reader's fast path reads the rule table of the reader, which calls it back
-    frozenset({"cgamesh.inputs.scene", "cgamesh.inputs.scene_fast"}),
     # batching (the options tables): manifest.py reads ``from cgamesh import __version__``,
     # and the package's ``__getattr__`` imports cgamesh.batching lazily for ``cgamesh.batch``
     frozenset({"cgamesh", "cgamesh.batching", "cgamesh.batching.engine", "cgamesh.batching.manifest"}),
@@ -53,13 +51,6 @@ KNOWN_CYCLES: set[frozenset[str]] = {
 
 # (b) (importer, private name used, as its full dotted name).
 KNOWN_PRIVATE_USES: set[tuple[str, str]] = {
-    ("cgamesh.inputs.scene_fast", "cgamesh.inputs.scene._CIRCLE_KEYS"),
-    ("cgamesh.inputs.scene_fast", "cgamesh.inputs.scene._DEGENERATE_RTOL"),
-    ("cgamesh.inputs.scene_fast", "cgamesh.inputs.scene._POINT_PAIR_KEYS"),
-    ("cgamesh.inputs.scene_fast", "cgamesh.inputs.scene._SURFACE_KEYS"),
-    ("cgamesh.inputs.scene_fast", "cgamesh.inputs.scene._TOP_KEYS"),
-    ("cgamesh.inputs.scene_fast", "cgamesh.inputs.scene._coincident"),
-    ("cgamesh.inputs.scene_fast", "cgamesh.inputs.scene._collinear"),
     # the batched passes (being rewritten into one body with the per-surface mesher) share the
     # per-surface mesher's grid, cap and ribbon helpers and the products' and flatness' internals
     ("cgamesh.meshing.batch_pass.chains", "cgamesh.meshing.circles._grid_weld"),
@@ -87,9 +78,7 @@ KNOWN_INPUTS_IMPORTS: set[tuple[str, str]] = {
 }
 
 # (d) module -> why it is still over MAX_LINES.
-KNOWN_LONG_MODULES: dict[str, str] = {
-    "cgamesh.inputs.scene": "to be split by concern",
-}
+KNOWN_LONG_MODULES: dict[str, str] = {}
 
 
 # --- reading the source -----------------------------------------------------------------------
