@@ -43,8 +43,6 @@ KNOWN_CYCLES: set[frozenset[str]] = {
     # batching (the options tables): manifest.py reads ``from cgamesh import __version__``,
     # and the package's ``__getattr__`` imports cgamesh.batching lazily for ``cgamesh.batch``
     frozenset({"cgamesh", "cgamesh.batching", "cgamesh.batching.engine", "cgamesh.batching.manifest"}),
-    # the USD reader runs its child, whose entry point calls the reader back
-    frozenset({"cgamesh.readers.readback", "cgamesh.readers.usd_sandbox"}),
     # cli (the options tables): realdata borrows build's report writer, build calls realdata
     frozenset({"cgamesh_cli.build", "cgamesh_cli.realdata"}),
 }
