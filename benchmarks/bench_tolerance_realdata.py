@@ -40,14 +40,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from report_accuracy import smallest_uniform, tolerance_mesh_deviation, uniform_grid  # noqa: E402
 from timing import best_of  # noqa: E402
 
-import cgamesh.pipeline as pipeline  # noqa: E402
-from cgamesh.centerline_pipeline import SOMA, TubeOptions, mesh_centerlines  # noqa: E402
+import cgamesh.pipelines.scene as pipeline  # noqa: E402
+from cgamesh.pipelines.centerlines import SOMA, TubeOptions, mesh_centerlines  # noqa: E402
 from cgamesh.pipelines.chains import split_chains  # noqa: E402
 from cgamesh.errors import CgameshError  # noqa: E402
 from cgamesh.inputs.centerlines import read_centerlines  # noqa: E402
 from cgamesh.meshing.tolerance.tolerance_plan import plan_tolerance  # noqa: E402
-from cgamesh.pipeline import Resolution, build_surface  # noqa: E402
-from cgamesh.pipeline import mesh_surface as real_mesh_surface  # noqa: E402
+from cgamesh.pipelines.scene import Resolution, build_surface  # noqa: E402
+from cgamesh.pipelines.scene import mesh_surface as real_mesh_surface  # noqa: E402
 
 
 def least_time(work, repeats: int = 2):

@@ -37,7 +37,7 @@ import numpy as np  # noqa: E402
 
 from cgamesh.meshing.tolerance.deviation import CIRCLES, SEGMENTS, grid_deviation  # noqa: E402
 from cgamesh.meshing.circles import mesh_circle_surface  # noqa: E402
-from cgamesh.pipeline import Resolution, build_surface, mesh_surface  # noqa: E402
+from cgamesh.pipelines.scene import Resolution, build_surface, mesh_surface  # noqa: E402
 from cgamesh.meshing.ribbons import mesh_ribbon_surface  # noqa: E402
 from cgamesh.meshing.tolerance.tolerance_plan import plan_tolerance  # noqa: E402
 from cgamesh.inputs.scene import load_scene  # noqa: E402

@@ -47,7 +47,7 @@ def test_tubes_of_a_tree_and_of_polylines_give_plain_arrays():
 
 def test_load_reads_scene_files_too():
     from cgamesh.inputs.scene import load_scene
-    from cgamesh.pipeline import Resolution, mesh_scene
+    from cgamesh.pipelines.scene import Resolution, mesh_scene
 
     meshes = cgamesh.load(ROOT / "examples" / "kb_tube.yaml", around=8, along=16)
     ((reference, material),) = mesh_scene(load_scene(ROOT / "examples" / "kb_tube.yaml"), Resolution(8, 16))

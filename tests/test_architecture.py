@@ -326,3 +326,25 @@ def test_no_module_over_the_line_limit():
     gone = sorted(set(KNOWN_LONG_MODULES) - long)
     assert not new, f"modules over {MAX_LINES} lines (split them by concern):\n  " + "\n  ".join(new)
     assert not gone, f"these listed modules are within {MAX_LINES} lines: remove them from KNOWN_LONG_MODULES: {gone}"
+
+
+# Public modules moved in issue 21, kept one release under their old names: old -> new.
+MOVED_MODULES = {"cgamesh.pipeline": "cgamesh.pipelines.scene",
+                 "cgamesh.centerline_pipeline": "cgamesh.pipelines.centerlines"}
+
+
+def test_a_moved_public_module_is_its_new_module_under_the_old_name_and_warns():
+    import subprocess
+    import sys
+
+    probe = """
+import importlib, sys, warnings
+old, new = sys.argv[1:]
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    module = importlib.import_module(old)
+assert module is importlib.import_module(new), module
+assert [w.category for w in caught] == [FutureWarning] and new in str(caught[0].message), caught
+"""
+    for old, new in MOVED_MODULES.items():
+        subprocess.run([sys.executable, "-c", probe, old, new], check=True, timeout=120)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
 from cgamesh.pipelines.tubes import closed_and_oriented
 from cgamesh.inputs.centerlines import Centerlines
 from cgamesh.meshing.frusta import enclosing_sphere_scale, frusta, node_spheres

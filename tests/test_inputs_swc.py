@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import realdata_files
-from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
 from cgamesh.errors import InvalidInputError
 from cgamesh.inputs.swc import parse_swc, read_swc
 from cgamesh.inputs.trees import split_tree

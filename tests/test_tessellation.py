@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 from cgamesh.meshing.tolerance.deviation import CIRCLES, SEGMENTS, grid_deviation
 from cgamesh.export.gltf import write_glb
 from cgamesh.meshing.circles import mesh_circle_surface
-from cgamesh.pipeline import Resolution, build_surface, mesh_surface
+from cgamesh.pipelines.scene import Resolution, build_surface, mesh_surface
 from cgamesh.readers.readback import read_gltf
 from cgamesh.meshing.ribbons import mesh_ribbon_surface
 from cgamesh.meshing.tolerance.tolerance_plan import plan_tolerance

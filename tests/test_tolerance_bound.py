@@ -25,7 +25,7 @@ from cgamesh.meshing.tolerance.derivative_bounds import cell_bounds, segment_sam
 from cgamesh.meshing.tolerance.deviation import CIRCLES, SEGMENTS, grid_deviation
 from cgamesh.meshing.ribbons import mesh_ribbon_surface
 from cgamesh.meshing.tolerance.tolerance_plan import plan_counts, plan_tolerance
-from cgamesh.pipeline import build_surface
+from cgamesh.pipelines.scene import build_surface
 from test_extremes import spec_of, tube
 
 HERE = Location("bound.yaml", 1, "surfaces[0]")

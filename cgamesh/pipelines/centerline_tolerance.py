@@ -40,7 +40,7 @@ def plan_tubes(chains, points, radii, soma, tangents, segment_of, lines, options
     """Every chain's tube planned to the tolerance (counts chosen, nothing mesh-sized made), in
     chain order, each priced as it is planned (``price`` refuses as soon as the run cannot fit);
     a chain that cannot be planned is skipped (``skipped``), or raises when strict."""
-    from cgamesh.pipeline import Resolution, plan_surface
+    from cgamesh.pipelines.scene import Resolution, plan_surface
 
     planned = []
     done = np.cumsum(chains.counts)  # nodes planned after each chain
@@ -110,7 +110,7 @@ class TolerancePrice:
 
 def mesh_planned_tubes(planned: list[PlannedTube], scalar, options, stem, skipped, progress, sink) -> None:
     """Mesh the planned tubes in order into ``sink``, each plan let go once its mesh is made."""
-    from cgamesh.pipeline import mesh_planned
+    from cgamesh.pipelines.scene import mesh_planned
 
     for k, item in enumerate(planned):
         planned[k] = None  # the plan's cells go with it

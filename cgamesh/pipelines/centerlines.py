@@ -5,7 +5,7 @@ surface spec: a circle control per node (centre = the node, normal = the chain's
 by central differences, one-sided at the ends, radius = the node's radius clamped to the minimum
 radius), a Catmull-Rom curve through them, ``interpolation = "motor"``, and (nodes - 1) * (K + 1)
 + 1 rings along, so K rings fall between consecutive nodes and one on every node. The specs go
-through the same pipeline as a scene file's surfaces (cgamesh.pipeline.mesh_surface). Branch
+through the same pipeline as a scene file's surfaces (cgamesh.pipelines.scene.mesh_surface). Branch
 nodes are closed by spheres of their radius (cgamesh.meshing.junctions), a neuron's soma (SWC
 type 1 nodes) by spheres of its radius; then everything is merged into one mesh
 (cgamesh.meshing.merge), kept apart (``split``), or united into one closed surface
@@ -92,7 +92,7 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     stem = _mesh_name(lines.source)
     planned = None
     if options.tolerance is not None:  # every chain planned, the whole run priced, then meshed
-        from cgamesh import centerline_tolerance as to_tolerance
+        from cgamesh.pipelines import centerline_tolerance as to_tolerance
 
         # the spheres first: one that cannot meet the tolerance is refused before any tube is planned
         sphere_vertices, sphere_triangles = to_tolerance.sphere_size(lines, radii, junctions, soma, options)
@@ -234,7 +234,7 @@ def _check_scale(lines: Centerlines, points: np.ndarray, chains: ChainList) -> N
 def _tube(chain: Chain, index: int, points, radii, soma, scalar, tangents, segment_of, lines: Centerlines,
           options: TubeOptions, stem: str) -> SurfaceMesh | list[SurfaceMesh] | None:
     """The tube of one chain with its attributes; None for a chain inside the soma alone."""
-    from cgamesh.pipeline import Resolution, mesh_surface
+    from cgamesh.pipelines.scene import Resolution, mesh_surface
 
     tube = tube_spec(chain, index, points, radii, soma, tangents, segment_of, lines, options, stem)
     if tube is None:
