@@ -15,9 +15,10 @@ lazy import is still a dependency; only its cost is deferred). The rules:
     ``cgamesh/foo/`` may import ``cgamesh.foo._impl``). Checked on every dotted part of what is
     imported (``from a._b import c``, ``from a.b import _c``) and on attributes read through an
     imported module (``import a.b as m; m._c``), for project modules only.
-(c) **geometry and meshing never import inputs**: no module under ``cgamesh/geometry/`` or
-    ``cgamesh/meshing/`` imports ``cgamesh.inputs`` or anything under it; the stages talk
-    through values, and a stage never reaches back up.
+(c) **No stage reaches back up** (FORBIDDEN): no module under ``cgamesh/geometry/`` or
+    ``cgamesh/meshing/`` imports ``cgamesh.inputs`` or anything under it (the stages talk
+    through values); the tracer, the mesher's independent referee, imports nothing of
+    ``cgamesh.meshing``; and no module of ``cgamesh`` imports the command line.
 (d) **No module over MAX_LINES lines**, counted as ``wc -l`` counts them (newlines).
 
 Violations that exist and are someone else's change to remove are listed below, each with why
@@ -68,8 +69,8 @@ KNOWN_PRIVATE_USES: set[tuple[str, str]] = {
     ("cgamesh_cli.realdata", "cgamesh_cli.build._write_report"),
 }
 
-# (c) (importer, inputs module imported).
-KNOWN_INPUTS_IMPORTS: set[tuple[str, str]] = {
+# (c) (importer, forbidden module imported).
+KNOWN_FORBIDDEN_IMPORTS: set[tuple[str, str]] = {
     # builds objects from the scene reader's specs; goes with the internal surface value that
     # replaces the specs past the reader (a later change of issue 21)
     ("cgamesh.geometry.construction", "cgamesh.inputs.scene"),
@@ -262,13 +263,17 @@ def private_uses() -> dict[tuple[str, str], int]:
     return found
 
 
-def inputs_imports() -> dict[tuple[str, str], int]:
+# (c) the packages whose modules must not import these packages' modules
+FORBIDDEN = {"cgamesh.geometry": ("cgamesh.inputs",), "cgamesh.meshing": ("cgamesh.inputs",),
+             "cgamesh.tracer": ("cgamesh.meshing",), "cgamesh": ("cgamesh_cli",)}
+
+
+def forbidden_imports() -> dict[tuple[str, str], int]:
     found = {}
     for importer in modules():
-        if not (_inside(importer, "cgamesh.geometry") or _inside(importer, "cgamesh.meshing")):
-            continue
+        banned = [b for package, names in FORBIDDEN.items() if _inside(importer, package) for b in names]
         for use in uses(importer):
-            if _inside(use.name, "cgamesh.inputs"):
+            if any(_inside(use.name, b) for b in banned):
                 found.setdefault((importer, _target(use.name)), use.line)
     return found
 
@@ -310,13 +315,13 @@ def test_no_use_of_another_modules_private_names():
     assert not gone, f"these listed private uses are gone: remove them from KNOWN_PRIVATE_USES: {gone}"
 
 
-def test_geometry_and_meshing_never_import_inputs():
-    found = inputs_imports()
+def test_no_stage_reaches_back_up():
+    found = forbidden_imports()
     new = [f"{_where(importer, line)}: {importer} imports {name}" for (importer, name), line in sorted(found.items())
-           if (importer, name) not in KNOWN_INPUTS_IMPORTS]
-    gone = sorted(KNOWN_INPUTS_IMPORTS - set(found))
-    assert not new, "geometry/ and meshing/ must not import inputs/:\n  " + "\n  ".join(new)
-    assert not gone, f"these listed imports are gone: remove them from KNOWN_INPUTS_IMPORTS: {gone}"
+           if (importer, name) not in KNOWN_FORBIDDEN_IMPORTS]
+    gone = sorted(KNOWN_FORBIDDEN_IMPORTS - set(found))
+    assert not new, f"forbidden imports ({FORBIDDEN}):\n  " + "\n  ".join(new)
+    assert not gone, f"these listed imports are gone: remove them from KNOWN_FORBIDDEN_IMPORTS: {gone}"
 
 
 def test_no_module_over_the_line_limit():
