@@ -28,7 +28,7 @@ from cgamesh.export.gltf import write_glb  # noqa: E402
 from cgamesh.export.usd import write_usd  # noqa: E402
 from cgamesh.material import Material  # noqa: E402
 from cgamesh.meshing.circles import mesh_circle_surface  # noqa: E402
-from cgamesh.pipeline import build_surface  # noqa: E402
+from cgamesh.pipelines.scene import build_surface  # noqa: E402
 from cgamesh.readers.readback import read_gltf  # noqa: E402
 from cgamesh.inputs.scene import load_scene  # noqa: E402
 

@@ -65,11 +65,11 @@ import sys
 import numpy as np
 import pyvista as pv
 import trimesh
-from cgamesh.centerline_pipeline import _chains
+from cgamesh.pipelines.chains import split_chains
 from cgamesh.inputs.centerlines import read_centerlines
 path, out, radius, mode = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
 lines = read_centerlines(path)
-chains, _ = _chains(lines)
+chains, _ = split_chains(lines)
 blocks = []
 for chain in chains:
     p = lines.points[chain.nodes]

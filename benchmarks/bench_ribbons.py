@@ -27,7 +27,7 @@ import numpy as np  # noqa: E402
 
 from timing import best_of  # noqa: E402 (this script's folder is on sys.path)
 
-from cgamesh.pipeline import build_surface  # noqa: E402
+from cgamesh.pipelines.scene import build_surface  # noqa: E402
 from cgamesh.meshing.ribbons import PairRings, mesh_ribbon_surface  # noqa: E402
 from cgamesh.inputs.scene import load_scene  # noqa: E402
 

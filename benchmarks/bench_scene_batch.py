@@ -39,7 +39,7 @@ from bench_scene_reader import flow_style, scene_document  # noqa: E402
 from timing import best_of  # noqa: E402 (this script's folder is on sys.path)
 
 from cgamesh.inputs.scene import load_scene  # noqa: E402
-from cgamesh.pipeline import Resolution, _batched_share, mesh_scene  # noqa: E402
+from cgamesh.pipelines.scene import Resolution, _batched_share, mesh_scene  # noqa: E402
 
 FIELDS = ("positions", "normals", "uvs", "faces", "tangents", "uv_lengths", "weld", "colors")
 

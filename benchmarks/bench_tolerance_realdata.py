@@ -6,7 +6,7 @@ For the smallest of navis' example neurons (its own radii) and dipy's fornix (30
 radius 0.5 mm), every chain is meshed to a tolerance of ``--relative`` times the median tube
 radius, as `cgamesh FILE --tolerance D` meshes it (motor interpolation through the nodes), and
 compared with the smallest uniform grid of the same tube with the same vertices around (rings
-evenly spaced in the parameter) whose deviation, measured by cgamesh.meshing.deviation, reaches
+evenly spaced in the parameter) whose deviation, measured by cgamesh.meshing.tolerance.deviation, reaches
 D: found here by doubling and bisection, not by the mesher. Printed per file: the tolerance
 meshes' and the uniform grids' vertices and meshing times summed over the chains, their ratios,
 the spread of the per-chain vertex ratios, and the largest measured deviation of a tolerance mesh
@@ -40,13 +40,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from report_accuracy import smallest_uniform, tolerance_mesh_deviation, uniform_grid  # noqa: E402
 from timing import best_of  # noqa: E402
 
-import cgamesh.pipeline as pipeline  # noqa: E402
-from cgamesh.centerline_pipeline import SOMA, TubeOptions, _chains, mesh_centerlines  # noqa: E402
+import cgamesh.pipelines.scene as pipeline  # noqa: E402
+from cgamesh.pipelines.centerlines import SOMA, TubeOptions, mesh_centerlines  # noqa: E402
+from cgamesh.pipelines.chains import split_chains  # noqa: E402
 from cgamesh.errors import CgameshError  # noqa: E402
 from cgamesh.inputs.centerlines import read_centerlines  # noqa: E402
-from cgamesh.meshing.tolerance_plan import plan_tolerance  # noqa: E402
-from cgamesh.pipeline import Resolution, build_surface  # noqa: E402
-from cgamesh.pipeline import mesh_surface as real_mesh_surface  # noqa: E402
+from cgamesh.meshing.tolerance.tolerance_plan import plan_tolerance  # noqa: E402
+from cgamesh.pipelines.scene import Resolution, build_surface  # noqa: E402
+from cgamesh.pipelines.scene import mesh_surface as real_mesh_surface  # noqa: E402
 
 
 def least_time(work, repeats: int = 2):
@@ -119,15 +120,15 @@ def compare_files(name: str, path: Path, radius: float | None, relative: float, 
     ``--around M --subdivide K`` whose every tube and sphere is within D (one resolution for the
     whole file, as the command takes it). Spheres: a UV sphere of M around is within D of its
     sphere when r deviation_bound(M) <= D (cgamesh.meshing.junctions), so M is at least what the
-    largest sphere needs; tubes: each tube's uniform grid measured (cgamesh.meshing.deviation),
+    largest sphere needs; tubes: each tube's uniform grid measured (cgamesh.meshing.tolerance.deviation),
     K the fewest reaching D on every tube, by doubling and bisection, for each M among the
     sag's count around (1.25, 1.5 and 2 times it, at least the spheres' floor); the fewest
     vertices win. Times: CPU, one run each of mesh_centerlines (no file written), with one BLAS thread. ``sample``:
     K searched on the N tubes whose grids stray most at --subdivide 0 only (every tube costs
     minutes at the resolutions involved): a lower bound of K, so the ratios printed are upper
     bounds of the true ones. ``one_around``: only the first M (the smallest of them)."""
-    from cgamesh.centerline_tolerance import spheres_around
-    from cgamesh.meshing.deviation import CIRCLES, grid_deviation
+    from cgamesh.pipelines.spheres import spheres_around
+    from cgamesh.meshing.tolerance.deviation import CIRCLES, grid_deviation
 
     lines = read_centerlines(str(path))
     radii = lines.radii if radius is None else np.full(len(lines.points), radius)
@@ -143,7 +144,7 @@ def compare_files(name: str, path: Path, radius: float | None, relative: float, 
 
     specs = tube_specs(path, tolerance_options)
     surfaces = [build_surface(spec) for spec in specs]
-    chains, junctions = _chains(lines)
+    chains, junctions = split_chains(lines)
     soma = lines.kinds == SOMA if lines.kinds is not None else np.zeros(len(lines.points), dtype=bool)
     sphere_radii = np.concatenate([radii[junctions[~soma[junctions]]], radii[soma]])
     floor = int(spheres_around(sphere_radii, tolerance).max()) if len(sphere_radii) else 3

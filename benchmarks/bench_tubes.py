@@ -30,7 +30,7 @@ from timing import best_of  # noqa: E402
 from cgamesh.export.gltf import write_glb  # noqa: E402
 from cgamesh.material import Material  # noqa: E402
 from cgamesh.meshing.circles import mesh_circle_surface  # noqa: E402
-from cgamesh.pipeline import build_surface  # noqa: E402
+from cgamesh.pipelines.scene import build_surface  # noqa: E402
 from cgamesh.inputs.scene import load_scene  # noqa: E402
 from cgamesh.geometry.surface import CircleRings  # noqa: E402
 

@@ -27,7 +27,7 @@ from scipy.spatial import cKDTree
 from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
 from cgamesh.material import Material
 from cgamesh.meshing.node_normals import envelope_normals
-from cgamesh.pipeline import Resolution, mesh_surface
+from cgamesh.pipelines.scene import Resolution, mesh_surface
 
 # Centreline samples per radius of arc length.
 CENTRELINE_DENSITY = 5.0

@@ -21,7 +21,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 import fidelity  # noqa: E402
 
 from cgamesh.geometry.objects import circle_euclidean  # noqa: E402
-from cgamesh.pipeline import build_surface  # noqa: E402
+from cgamesh.pipelines.scene import build_surface  # noqa: E402
 
 
 def ring_radii(chain: fidelity.Chain, interpolation: str, t: np.ndarray) -> np.ndarray:

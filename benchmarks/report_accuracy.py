@@ -5,7 +5,7 @@
 1. For every surface of the examples (circles and point pairs) it meshes uniform grids of
    growing size and tolerance-driven meshes for tolerances from 1e-1 to 1e-4 of the surface's
    size, and measures each mesh's largest deviation from the true surface over triangle
-   interiors (cgamesh.meshing.deviation), its vertex count and the time it took; and, at 1e-2,
+   interiors (cgamesh.meshing.tolerance.deviation), its vertex count and the time it took; and, at 1e-2,
    1e-3 and 1e-4, compares the tolerance mesh with the smallest uniform grid (same vertices
    around, rings evenly in t) reaching the tolerance, found by search over uniform grids:
    vertices and time as ratios to that grid's.
@@ -35,11 +35,11 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from cgamesh.meshing.deviation import CIRCLES, SEGMENTS, grid_deviation  # noqa: E402
+from cgamesh.meshing.tolerance.deviation import CIRCLES, SEGMENTS, grid_deviation  # noqa: E402
 from cgamesh.meshing.circles import mesh_circle_surface  # noqa: E402
-from cgamesh.pipeline import Resolution, build_surface, mesh_surface  # noqa: E402
+from cgamesh.pipelines.scene import Resolution, build_surface, mesh_surface  # noqa: E402
 from cgamesh.meshing.ribbons import mesh_ribbon_surface  # noqa: E402
-from cgamesh.meshing.tolerance_plan import plan_tolerance  # noqa: E402
+from cgamesh.meshing.tolerance.tolerance_plan import plan_tolerance  # noqa: E402
 from cgamesh.inputs.scene import load_scene  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -90,7 +90,7 @@ def measure_surface(name, spec, sizes, tolerances) -> list[Row]:
 
 
 def tolerance_mesh_deviation(surface, spec, tolerance: float, mesh) -> float:
-    """cgamesh.meshing.deviation's measure of a tolerance mesh (on its plan's rings)."""
+    """cgamesh.meshing.tolerance.deviation's measure of a tolerance mesh (on its plan's rings)."""
     kind = "point_pairs" if spec.type == "point_pairs" else "circles"
     plan = plan_tolerance(surface, tolerance, kind, spec.closed)
     columns = plan.around if kind == "point_pairs" else plan.around + 1
@@ -133,7 +133,7 @@ def uniform_grid(surface, spec, around: int, rings: int):
 
 def smallest_uniform(surface, spec, around: int, tolerance: float, start: int) -> tuple[int, float]:
     """The fewest rings (and the deviation) of a uniform grid with ``around`` that reaches the
-    tolerance, by doubling then bisection on its measured deviation (cgamesh.meshing.deviation)."""
+    tolerance, by doubling then bisection on its measured deviation (cgamesh.meshing.tolerance.deviation)."""
     family = SEGMENTS if spec.type == "point_pairs" else CIRCLES
 
     def deviation(rings):
@@ -342,7 +342,7 @@ def main() -> None:
         "docs/tolerance.md) against the smallest uniform grid with the same vertices around (across)\n"
         "and rings evenly spaced in the parameter whose deviation reaches the tolerance, found here by\n"
         "doubling and bisection on its ring count. Bound: the tolerance mesh's a priori bound; measured:\n"
-        "cgamesh.meshing.deviation's figure (relative). Times are the least of 3 runs, on the\n"
+        "cgamesh.meshing.tolerance.deviation's figure (relative). Times are the least of 3 runs, on the\n"
         "process's CPU clock with one BLAS thread, of `pipeline.mesh_surface` from the scene's\n"
         "surface spec, as a user gets each mesh: with `Resolution(tolerance=D)` (building the\n"
         "surface, its checks, planning, meshing) and with `Resolution(around=M, along=K)` (building\n"
@@ -350,7 +350,7 @@ def main() -> None:
         "are tolerance mesh / uniform grid.\n\n"
         + against + "\n\n## Tessellation\n\n"
         "Deviation is the largest distance of the mesh from the true surface over triangle interiors\n"
-        "(cgamesh.meshing.deviation), relative to the surface's size. Uniform grids have n vertices\n"
+        "(cgamesh.meshing.tolerance.deviation), relative to the surface's size. Uniform grids have n vertices\n"
         "around (n / 4 across a ribbon) and n rings per segment; tolerance meshes are cgamesh's\n"
         "tolerance-driven tessellation (their deviation is measured the same way, after the timing).\n"
         "Plots: `figures/accuracy_<example>_<surface>.png`.\n\n"

@@ -128,7 +128,7 @@ def load(path: str | os.PathLike[str], **options: Any) -> Meshes:
     if os.path.splitext(name)[1].lower() in SCENE_SUFFIXES:
         _known(options, SCENE_OPTIONS)
         from cgamesh.inputs.scene import load_scene
-        from cgamesh.pipeline import Resolution, mesh_scene
+        from cgamesh.pipelines.scene import Resolution, mesh_scene
 
         scene = load_scene(name)
         resolution = Resolution(options.get("around"), options.get("along"), options.get("tolerance"))
@@ -216,7 +216,7 @@ def _flat(values, pieces, name: str, key: str) -> np.ndarray:
 
 
 def _mesh(lines, options: dict) -> Meshes:
-    from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+    from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
 
     built = mesh_centerlines(lines, TubeOptions(**options))
     return Meshes(tuple((mesh, built.material) for mesh in built.meshes), up=built.up, units=built.units,

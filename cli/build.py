@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> str:
         return realdata.run(args)
     from cgamesh.export.atomic import all_or_nothing
     from cgamesh.export.registry import check_distinct, vertices_written, write
-    from cgamesh.pipeline import Resolution, mesh_scene
+    from cgamesh.pipelines.scene import Resolution, mesh_scene
     from cgamesh.progress import Progress
     from cgamesh.inputs.scene import load_scene
 

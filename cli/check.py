@@ -37,7 +37,7 @@ def run(args: argparse.Namespace):
 
     path = Path(args.file)
     if path.suffix.lower() in (".yaml", ".yml"):
-        from cgamesh.pipeline import Resolution, mesh_scene
+        from cgamesh.pipelines.scene import Resolution, mesh_scene
         from cgamesh.inputs.scene import load_scene
 
         scene = load_scene(path, rendering=False)  # the rendering keys are render's and verify's

@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> str | int:
     """Read, mesh and write a centreline input; the summary, or EXIT_SKIPPED after printing it."""
     import numpy as np
 
-    from cgamesh.centerline_pipeline import TubeOptions, chain_count, mesh_centerlines, uses_batched_pass
+    from cgamesh.pipelines.centerlines import TubeOptions, chain_count, mesh_centerlines, uses_batched_pass
     from cgamesh.export.registry import write, writer_for
     from cgamesh.inputs.centerlines import read_centerlines
     from cgamesh.progress import Progress

@@ -26,7 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> str:
-    from cgamesh.pipeline import Resolution, mesh_scene
+    from cgamesh.pipelines.scene import Resolution, mesh_scene
     from cgamesh.inputs.scene import load_scene
     from cgamesh.viewer import write_page
 

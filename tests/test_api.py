@@ -47,7 +47,7 @@ def test_tubes_of_a_tree_and_of_polylines_give_plain_arrays():
 
 def test_load_reads_scene_files_too():
     from cgamesh.inputs.scene import load_scene
-    from cgamesh.pipeline import Resolution, mesh_scene
+    from cgamesh.pipelines.scene import Resolution, mesh_scene
 
     meshes = cgamesh.load(ROOT / "examples" / "kb_tube.yaml", around=8, along=16)
     ((reference, material),) = mesh_scene(load_scene(ROOT / "examples" / "kb_tube.yaml"), Resolution(8, 16))
@@ -170,7 +170,7 @@ def polylines(draw):
 def test_node_rings_lie_on_the_node_circles_for_any_polyline(case):
     """Whatever carries the rings between nodes, every node's ring is its circle; a polyline
     that cannot be meshed is reported, never silently dropped."""
-    from cgamesh.centerline_pipeline import node_tangents
+    from cgamesh.pipelines.tubes import node_tangents
 
     points, radius = case
     meshes = cgamesh.tubes([points], radii=radius, around=6, subdivide=2, split=True)

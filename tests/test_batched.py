@@ -21,7 +21,7 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
 from cgamesh.inputs.centerlines import read_centerlines
 from realdata_files import fornix, smallest_neuron
 

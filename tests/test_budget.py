@@ -16,7 +16,7 @@ from cgamesh.budget import Budget, ResourceLimitError, format_size, parse_size
 from cgamesh.export.registry import write
 from cgamesh.geometry.curves.bezier import bernstein
 from cgamesh.inputs.scene import load_scene, parse_scene
-from cgamesh.pipeline import Resolution, mesh_scene, plan_surface
+from cgamesh.pipelines.scene import Resolution, mesh_scene, plan_surface
 from cgamesh_cli.main import main
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"

@@ -8,7 +8,7 @@ import tracemalloc
 import numpy as np
 
 from cgamesh import budget
-from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
 from cgamesh.export.gltf import write_glb
 from cgamesh.inputs.centerlines import Centerlines, read_centerlines
 from realdata_files import fornix

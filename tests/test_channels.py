@@ -20,7 +20,7 @@ from cgamesh.inputs.scene import load_scene
 from cgamesh.meshing.colors import (COLORMAPS, NAN_COLOR, colormap, direction_colors, linear_to_srgb,
                                     segment_colors, srgb_to_linear)
 from cgamesh.meshing.mesh import SurfaceMesh
-from cgamesh.pipeline import Resolution, mesh_scene
+from cgamesh.pipelines.scene import Resolution, mesh_scene
 from cgamesh.readers.readback import read_gltf, read_trimesh, read_usd
 from gltf_validator import assert_clean
 

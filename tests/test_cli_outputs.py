@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-import cgamesh.pipeline
+import cgamesh.pipelines.scene
 from cgamesh.export import registry
 from cgamesh_cli.main import main
 
@@ -21,13 +21,13 @@ ALL = [".glb", ".gltf", ".usda", ".usdc", ".usd", ".usdz", ".obj", ".ply", ".stl
 def test_several_outputs_are_written_from_one_meshing(tmp_path, capsys, monkeypatch):
     pytest.importorskip("pxr")
     calls = []
-    original = cgamesh.pipeline.mesh_planned
+    original = cgamesh.pipelines.scene.mesh_planned
 
     def counting(plan, *args, **kwargs):
         calls.append(plan.spec.name)
         return original(plan, *args, **kwargs)
 
-    monkeypatch.setattr(cgamesh.pipeline, "mesh_planned", counting)
+    monkeypatch.setattr(cgamesh.pipelines.scene, "mesh_planned", counting)
     # the batched pass (cgamesh.meshing.scene_batch) meshes groups of surfaces: count them too
     from cgamesh.meshing.scene_batch import scene as batched_scene
 

@@ -9,7 +9,7 @@ import pygltflib
 import pytest
 import trimesh
 
-from cgamesh.pipeline import Resolution, mesh_scene
+from cgamesh.pipelines.scene import Resolution, mesh_scene
 from cgamesh.inputs.scene import load_scene
 from cgamesh_cli.main import main
 from gltf_validator import assert_clean

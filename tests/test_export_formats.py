@@ -17,7 +17,7 @@ import trimesh
 
 from cgamesh.export import usdz
 from cgamesh.export.registry import WRITERS
-from cgamesh.pipeline import Resolution, mesh_scene
+from cgamesh.pipelines.scene import Resolution, mesh_scene
 from cgamesh.inputs.scene import load_scene
 from cgamesh_cli.main import main
 from export_checks import check_gltf_reload, check_usd_file, pxr_or_skip

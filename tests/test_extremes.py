@@ -23,7 +23,7 @@ from normal_differences import assert_normals_match_differences
 from cgamesh.errors import DegenerateGeometryError, InvalidInputError
 from cgamesh.material import Material
 from cgamesh.meshing.circles import mesh_circle_surface
-from cgamesh.pipeline import build_surface
+from cgamesh.pipelines.scene import build_surface
 from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
 
 ON_SURFACE = 1e-9  # relative to the surface's size

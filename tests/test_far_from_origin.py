@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from export_checks import pxr_or_skip
-from cgamesh.meshing.deviation import circle_read_out
+from cgamesh.meshing.tolerance.deviation import circle_read_out
 from cgamesh.export.registry import write
-from cgamesh.pipeline import Resolution, build_surface, mesh_scene
+from cgamesh.pipelines.scene import Resolution, build_surface, mesh_scene
 from cgamesh.readers.readback import read_gltf
 from cgamesh.inputs.scene import parse_scene
 

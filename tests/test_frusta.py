@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cgamesh.centerline_pipeline import TubeOptions, closed_and_oriented, mesh_centerlines
+from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
+from cgamesh.pipelines.tubes import closed_and_oriented
 from cgamesh.inputs.centerlines import Centerlines
 from cgamesh.meshing.frusta import enclosing_sphere_scale, frusta, node_spheres
 
@@ -61,10 +62,10 @@ def test_a_tube_bending_tighter_than_its_radius_is_caught_and_meshed_as_frusta()
 
 @pytest.mark.parametrize("radius, in_order", [(0.05, True), (0.8, False)])
 def test_the_ring_order_check_fails_on_a_folding_tube_and_passes_a_thin_one(monkeypatch, radius, in_order):
-    import cgamesh.centerline_pipeline as pipeline
+    import cgamesh.pipelines.tubes as tubes
 
     seen = []
-    original = pipeline.rings_in_order
-    monkeypatch.setattr(pipeline, "rings_in_order", lambda mesh: seen.append(original(mesh)) or seen[-1])
+    original = tubes.rings_in_order
+    monkeypatch.setattr(tubes, "rings_in_order", lambda mesh: seen.append(original(mesh)) or seen[-1])
     mesh_centerlines(_bent_chain(radius), TubeOptions(watertight=True, subdivide=3))
     assert seen == [in_order]

@@ -24,7 +24,7 @@ from direction_strategies import coordinate, direction, sphere_direction
 
 from cgamesh.errors import InvalidInputError
 from cgamesh.inputs.scene import parse_scene
-from cgamesh.pipeline import Resolution, mesh_scene
+from cgamesh.pipelines.scene import Resolution, mesh_scene
 
 CURVES = ("linear", "bezier", "rational_bezier", "kb", "catmull_rom")
 # A modest count keeps the suite fast; CGAMESH_PROPERTY_EXAMPLES asks for a longer search.

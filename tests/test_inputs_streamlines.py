@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 import realdata_files
-from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines, node_tangents
+from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
+from cgamesh.pipelines.tubes import node_tangents
 from cgamesh.inputs.streamlines import read_streamlines
 from cgamesh_cli.main import main
 

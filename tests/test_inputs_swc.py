@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import realdata_files
-from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
 from cgamesh.errors import InvalidInputError
 from cgamesh.inputs.swc import parse_swc, read_swc
 from cgamesh.inputs.trees import split_tree
@@ -191,7 +191,7 @@ def test_node_rings_pass_through_the_node_circles_of_a_real_neuron():
             continue
         rings = tubes[i].positions.reshape(-1, options.around + 1, 3)[:: options.subdivide + 1]
         assert len(rings) == len(nodes)
-        from cgamesh.centerline_pipeline import node_tangents
+        from cgamesh.pipelines.tubes import node_tangents
         from cgamesh.meshing.node_normals import envelope_normals
 
         # the path's bisectors, turned at the few nodes whose rings would leave the envelope

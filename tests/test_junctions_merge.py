@@ -67,7 +67,7 @@ def test_spheres_merged_a_block_at_a_time_are_the_spheres_merged_whole(color_by,
     spheres on a neuron with hundreds of junctions and a soma of twelve nodes, against one block)."""
     from dataclasses import replace
 
-    import cgamesh.centerline_pipeline as pipeline
+    import cgamesh.pipelines.centerlines as pipeline
     from cgamesh.inputs.centerlines import read_centerlines
     from realdata_files import smallest_neuron
 

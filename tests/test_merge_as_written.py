@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
 from cgamesh.export.gltf import write_glb, write_gltf
 from cgamesh.inputs.centerlines import Centerlines, read_centerlines
 from cgamesh.meshing.junctions import uv_spheres

@@ -17,7 +17,7 @@ import pytest
 
 from cgamesh.geometry.algebra import rotors
 from cgamesh.meshing.circles import mesh_circle_surface
-from cgamesh.pipeline import build_surface
+from cgamesh.pipelines.scene import build_surface
 from cgamesh.inputs.scene import parse_scene
 from cgamesh.geometry.surface import CircleRings
 

@@ -24,7 +24,7 @@ from cgamesh.geometry.objects import circle_euclidean, circle_from_center_normal
 from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec, load_scene
 from cgamesh.material import Material
 from cgamesh.meshing.circles import mesh_circle_surface
-from cgamesh.pipeline import Resolution, build_surface, mesh_scene, mesh_surface
+from cgamesh.pipelines.scene import Resolution, build_surface, mesh_scene, mesh_surface
 from cgamesh.tracer.evolved import TracedSurface
 from cgamesh.tracer.roots import RootFinder
 from cgamesh.tracer.verify import check_vertices
@@ -534,7 +534,7 @@ def test_centreline_inputs_are_meshed_with_motor_interpolation(tmp_path):
     of the sample radius all along (blade circles would balloon to sqrt(1 + 5^2) = 5.1 radii
     half-way), through the Python API and an SWC file alike."""
     import cgamesh
-    from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
+    from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
     from cgamesh.inputs.swc import read_swc
 
     points = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [20.0, 3.0, 0.0]])

@@ -21,7 +21,7 @@ from test_motors import bent_tube, circle_distance, motor_spec
 
 from cgamesh.errors import InvalidInputError
 from cgamesh.meshing.circles import mesh_circle_surface
-from cgamesh.pipeline import build_surface
+from cgamesh.pipelines.scene import build_surface
 
 ON_SURFACE = 1e-9  # relative to the surface's size
 EXAMPLES = settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from cgamesh.geometry import objects
-from cgamesh.pipeline import build_surface
+from cgamesh.pipelines.scene import build_surface
 from cgamesh.inputs.scene import parse_scene
 from cgamesh.geometry.surface import CircleRings
 

@@ -148,7 +148,7 @@ WRITER = """
 import os, sys, time
 import cgamesh.export.atomic as atomic
 from cgamesh.inputs.scene import load_scene
-from cgamesh.pipeline import Resolution, mesh_scene
+from cgamesh.pipelines.scene import Resolution, mesh_scene
 from cgamesh.export.gltf import write_gltf
 scene = load_scene(sys.argv[1])
 meshes = mesh_scene(scene, Resolution(int(sys.argv[3]), 16))

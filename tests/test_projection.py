@@ -11,7 +11,7 @@ from cgamesh.geometry.curves.kochanek_bartels import KochanekBartels, catmull_ro
 from cgamesh.geometry.curves.linear import Linear
 from cgamesh.errors import DegenerateGeometryError
 from cgamesh.geometry.frame import LocalFrame
-from cgamesh.pipeline import build_surface
+from cgamesh.pipelines.scene import build_surface
 from cgamesh.geometry.projection import margin, project, project_scalar, project_without_derivatives
 from cgamesh.inputs.scene import parse_scene
 from cgamesh.geometry.surface import EvolvedSurface

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cgamesh.pipeline import Resolution, mesh_scene
+from cgamesh.pipelines.scene import Resolution, mesh_scene
 from cgamesh.quality import load_meshes, report
 from cgamesh.inputs.scene import load_scene, parse_scene
 from cgamesh_cli.main import main

@@ -19,7 +19,7 @@ from cgamesh.geometry.algebra import rotors
 from cgamesh.geometry.algebra.conformal import up
 from cgamesh.errors import DegenerateGeometryError, NonFiniteInputError
 from cgamesh.export.gltf import write_glb
-from cgamesh.pipeline import Resolution, build_surface, mesh_surface
+from cgamesh.pipelines.scene import Resolution, build_surface, mesh_surface
 from cgamesh.geometry.projection import project
 from cgamesh.meshing.ribbons import PairRings
 from cgamesh.inputs.scene import load_scene, parse_scene

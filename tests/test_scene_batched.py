@@ -30,7 +30,7 @@ from direction_strategies import coordinate, direction, sphere_direction
 
 from cgamesh.errors import CgameshError
 from cgamesh.inputs.scene import load_scene, parse_scene
-from cgamesh.pipeline import Resolution, _batched_share, mesh_scene, plan_surface
+from cgamesh.pipelines.scene import Resolution, _batched_share, mesh_scene, plan_surface
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = sorted((ROOT / "examples").glob("*.yaml"))

@@ -469,7 +469,7 @@ def _careful_plain(text: str):
     PyYAML refuses the text or a key is not a string."""
     import yaml
 
-    from cgamesh.inputs.scene import _core_value, _CoreLoader
+    from cgamesh.inputs.scene_yaml import CoreLoader, core_value
 
     keys = 0
 
@@ -486,10 +486,10 @@ def _careful_plain(text: str):
             return out
         if isinstance(node, yaml.SequenceNode):
             return [plain(value, True) for value in node.value]
-        return _core_value(node)
+        return core_value(node)
 
     try:
-        return plain(yaml.compose(text, Loader=_CoreLoader)), keys
+        return plain(yaml.compose(text, Loader=CoreLoader)), keys
     except (yaml.YAMLError, KeyError, ValueError, TypeError, RecursionError):
         return None
 

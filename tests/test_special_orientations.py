@@ -18,7 +18,7 @@ from cgamesh.geometry.algebra import products, rotors
 from cgamesh.geometry.objects import circle_euclidean, circle_from_center_normal_radius, perpendicular_unit
 from cgamesh.inputs.scene import parse_scene
 from cgamesh.meshing.ring_frames import transported_frames
-from cgamesh.pipeline import Resolution, mesh_surface
+from cgamesh.pipelines.scene import Resolution, mesh_surface
 
 AXES = np.array([[1.0, 0, 0], [-1.0, 0, 0], [0, 1.0, 0], [0, -1.0, 0], [0, 0, 1.0], [0, 0, -1.0]])
 CURVES = ("linear", "bezier", "rational_bezier", "kb", "catmull_rom")

@@ -5,7 +5,7 @@ The measurement here is the test's own: the GLB is read back through its node tr
 triangle is sampled at 15 barycentric points (interior and edges), each sample finds its nearest
 member of the surface (circle or ruling segment) through a k-d tree over a point cloud of the
 surface, and golden-section search in t refines it on exact members. It is denser than
-cgamesh.meshing.deviation and shares only the closed-form distances to a circle and to a segment.
+cgamesh.meshing.tolerance.deviation and shares only the closed-form distances to a circle and to a segment.
 """
 
 from __future__ import annotations
@@ -16,13 +16,13 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from cgamesh.meshing.deviation import CIRCLES, SEGMENTS, grid_deviation
+from cgamesh.meshing.tolerance.deviation import CIRCLES, SEGMENTS, grid_deviation
 from cgamesh.export.gltf import write_glb
 from cgamesh.meshing.circles import mesh_circle_surface
-from cgamesh.pipeline import Resolution, build_surface, mesh_surface
+from cgamesh.pipelines.scene import Resolution, build_surface, mesh_surface
 from cgamesh.readers.readback import read_gltf
 from cgamesh.meshing.ribbons import mesh_ribbon_surface
-from cgamesh.meshing.tolerance_plan import plan_tolerance
+from cgamesh.meshing.tolerance.tolerance_plan import plan_tolerance
 from cgamesh.inputs.scene import load_scene
 
 EXAMPLES = sorted((Path(__file__).resolve().parent.parent / "examples").glob("*.yaml"))
@@ -108,7 +108,7 @@ def exported_positions(mesh, scene, folder: Path) -> np.ndarray:
 def test_tolerance_is_met_on_the_exported_mesh(path, index, relative, tmp_path):
     """The plan's bound is at most the tolerance, and the deviation measured independently is at
     most the bound: by the 15-sample k-d-tree measure on the exported GLB at 1e-2 and 1e-3, and
-    by cgamesh.meshing.deviation at 1e-4 (where the meshes are too large for the dense measure)."""
+    by cgamesh.meshing.tolerance.deviation at 1e-4 (where the meshes are too large for the dense measure)."""
     scene = load_scene(path)
     spec = scene.surfaces[index]
     surface = build_surface(spec)
@@ -153,7 +153,7 @@ OVER_TWICE = {("motor_tube", 1, 1e-2)}
 @pytest.mark.parametrize("path, index", COMPARED, ids=[f"{p.stem}[{i}]" for p, i in CASES])
 def test_vertices_against_the_smallest_uniform_grid(path, index, relative):
     """The smallest uniform grid with the same vertices around that reaches the tolerance, found
-    by bisection on its ring count (measured by cgamesh.meshing.deviation): the tolerance mesh
+    by bisection on its ring count (measured by cgamesh.meshing.tolerance.deviation): the tolerance mesh
     never needs more than twice its vertices, and the target is fewer. Where the target is
     missed (the bound is conservative: docs/tolerance.md), the test reports an expected failure
     with the ratio, not a pass."""

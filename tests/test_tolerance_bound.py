@@ -1,8 +1,8 @@
-"""The a priori tolerance bound (cgamesh.meshing.tolerance_plan) is never exceeded.
+"""The a priori tolerance bound (cgamesh.meshing.tolerance.tolerance_plan) is never exceeded.
 
 Property tests over random tubes and ribbons (every curve kind, sizes and positions at the
 extremes' ranges of tests/test_extremes.py): the plan's bound is at most the tolerance, and the
-deviation measured by cgamesh.meshing.deviation on the mesh made on the plan's rings is at most
+deviation measured by cgamesh.meshing.tolerance.deviation on the mesh made on the plan's rings is at most
 the bound. Also: the derivative bounds cover analytic derivatives; impossible tolerances are
 refused with an InvalidInputError, quickly; the planned counts are those the plan uses.
 """
@@ -21,11 +21,11 @@ from cgamesh.errors import InvalidInputError
 from cgamesh.inputs.scene import Location, PointPairControl, SurfaceSpec
 from cgamesh.material import Material
 from cgamesh.meshing.circles import mesh_circle_surface
-from cgamesh.meshing.derivative_bounds import cell_bounds, segment_samples
-from cgamesh.meshing.deviation import CIRCLES, SEGMENTS, grid_deviation
+from cgamesh.meshing.tolerance.derivative_bounds import cell_bounds, segment_samples
+from cgamesh.meshing.tolerance.deviation import CIRCLES, SEGMENTS, grid_deviation
 from cgamesh.meshing.ribbons import mesh_ribbon_surface
-from cgamesh.meshing.tolerance_plan import plan_counts, plan_tolerance
-from cgamesh.pipeline import build_surface
+from cgamesh.meshing.tolerance.tolerance_plan import plan_counts, plan_tolerance
+from cgamesh.pipelines.scene import build_surface
 from test_extremes import spec_of, tube
 
 HERE = Location("bound.yaml", 1, "surfaces[0]")
@@ -34,7 +34,7 @@ CURVES = ["linear", "bezier", "kb", "catmull_rom", "rational_bezier"]
 
 
 def measured(surface, plan, kind: str) -> float:
-    """cgamesh.meshing.deviation's figure for the mesh on the plan's rings."""
+    """cgamesh.meshing.tolerance.deviation's figure for the mesh on the plan's rings."""
     if kind == "point_pairs":
         mesh = mesh_ribbon_surface(surface, plan.around, t=plan.t)
         return grid_deviation(surface, plan.t, mesh.positions.reshape(plan.rings, plan.around, 3), SEGMENTS).max
@@ -46,7 +46,7 @@ def measured(surface, plan, kind: str) -> float:
 def placed_terms(surface, tolerance: float, kind: str, closed: bool = False):
     """(plan, cells, table, names, error, terms) of the plan placed for ``tolerance``: each
     interval's bound and its terms, as the plan prices them (tolerance_plan's private tables)."""
-    from cgamesh.meshing import tolerance_plan
+    from cgamesh.meshing.tolerance import tolerance_plan
 
     prepared = tolerance_plan.PreparedPlan(surface, tolerance, kind, closed)
     plan = prepared.place()
@@ -120,11 +120,11 @@ def random_ribbon(log_scale, distance, curve, count, twist, flat, seed):
        seed=st.integers(0, 2**32 - 1))
 def test_the_ribbon_twist_bound_covers_every_interval_alone(log_scale, distance, curve, count, twist, flat,
                                                            log_relative, seed):
-    """The ribbon bound without the twist's tangential part (cgamesh.meshing.ribbon_twist), taken
+    """The ribbon bound without the twist's tangential part (cgamesh.meshing.tolerance.ribbon_twist), taken
     alone, is at least each interval's measured deviation wherever it applies, on random flat
     and twisted ribbons (the plan's bound is the smaller of two, so the end-to-end tests would
     not notice one that fails), and the plan's bound is that minimum."""
-    from cgamesh.meshing.ribbon_twist import ribbon_twist_error
+    from cgamesh.meshing.tolerance.ribbon_twist import ribbon_twist_error
 
     surface = random_ribbon(log_scale, distance, curve, count, twist, flat, seed)
     plan, _, _, _, error, terms = placed_terms(surface, 10.0**log_relative * surface.frame.scale, "point_pairs")
@@ -145,7 +145,7 @@ def test_a_flat_ribbons_twist_is_tangent():
     without the tangential part is the smaller one on most intervals at 1e-4 (83% of them, with 11
     across: enough for the bubble's shift, kappa |gamma_t|, to be small)."""
     from cgamesh.inputs.scene import load_scene
-    from cgamesh.meshing.ribbon_twist import ribbon_twist_error
+    from cgamesh.meshing.tolerance.ribbon_twist import ribbon_twist_error
 
     spec = load_scene("examples/fig12_cocircular_chords.yaml").surfaces[0]
     surface = build_surface(spec)
@@ -212,11 +212,11 @@ def test_tilted_flaring_tube_bound_is_never_exceeded(log_scale, distance, curve,
        log_relative=st.floats(-3.0, -1.5), seed=st.integers(0, 2**32 - 1))
 def test_the_normal_projection_bounds_every_interval_alone(log_scale, distance, curve, count, tilt, flare,
                                                           log_relative, seed):
-    """The bound by the error normal to the surface (cgamesh.meshing.normal_projection), taken
+    """The bound by the error normal to the surface (cgamesh.meshing.tolerance.normal_projection), taken
     alone, is at least each interval's measured deviation wherever it applies: the plan's bound
     is the smallest of three, so the end-to-end tests above would not notice one that fails."""
-    from cgamesh.meshing import tolerance_plan
-    from cgamesh.meshing.normal_projection import normal_projection_error
+    from cgamesh.meshing.tolerance import tolerance_plan
+    from cgamesh.meshing.tolerance.normal_projection import normal_projection_error
 
     centres, normals, radii, weights = tilted_flaring_tube(log_scale, distance, curve, count, tilt, flare, seed)
     surface = build_surface(spec_of(centres, normals, radii, curve=curve, weights=weights))
@@ -235,12 +235,12 @@ def test_the_normal_projection_bounds_every_interval_alone(log_scale, distance, 
 def test_the_error_normal_to_the_surface_is_what_bounds_tubes(path, twist_share, normal_share):
     """On tubes whose circles are about perpendicular to their path, the bounds that drop the
     twist's tangential part (the bubble reparametrisation, and the projection on the surface's
-    normal, cgamesh.meshing.normal_projection) are the smaller ones on most intervals, so the
+    normal, cgamesh.meshing.tolerance.normal_projection) are the smaller ones on most intervals, so the
     rings follow them (measured at 1e-3: the normal projection on 91% of closed_loop's intervals,
     81% of kb_tube's); an interval's bound is the smallest of the three, exactly."""
     from cgamesh.inputs.scene import load_scene
-    from cgamesh.meshing import tolerance_plan
-    from cgamesh.meshing.normal_projection import normal_projection_error
+    from cgamesh.meshing.tolerance import quad_bounds, tolerance_plan
+    from cgamesh.meshing.tolerance.normal_projection import normal_projection_error
 
     spec = load_scene(path).surfaces[0]
     surface = build_surface(spec)
@@ -254,32 +254,12 @@ def test_the_error_normal_to_the_surface_is_what_bounds_tubes(path, twist_share,
     a = terms["A"] + 2.0 * terms["B"] * spin + terms["Rm"] * (spin * spin + spin_rate)
     b = terms["B"] + terms["Rm"] * spin
     whole = sag + a * h * h / 8.0 + b * h * np.sin(np.pi / plan.around) / 2.0
-    twist = sag + tolerance_plan._normal_twist_error(terms, h, plan.around, a, b, spin, spin_rate)
+    twist = sag + quad_bounds.normal_twist_error(terms, h, plan.around, a, b, spin, spin_rate)
     wide = tolerance_plan._widened(cells, table, names, plan.t)
     normal = normal_projection_error(terms, wide, h, plan.around, cells.closed_rate)
     assert np.all(error == np.minimum(np.minimum(whole, twist), normal))
     assert np.mean(twist < whole) >= twist_share
     assert np.mean(normal < np.minimum(whole, twist)) >= normal_share
-
-
-@settings(max_examples=30, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), count=st.integers(1, 300), wobble=st.floats(0.0, 3.0))
-def test_the_plans_transport_is_the_meshers(seed, count, wobble):
-    """The plan's quaternion transport (cgamesh.meshing.dense_transport) carries the same frames
-    as the mesher's rotors (circles.transported_frames), to rounding: normals that wander,
-    exact axes and turns back (a normal followed by its opposite) included."""
-    from cgamesh.meshing.ring_frames import transported_frames
-    from cgamesh.meshing.dense_transport import transported_axes
-
-    rng = np.random.default_rng(seed)
-    normal = np.cumsum(wobble * rng.normal(size=(count, 3)), axis=0) + np.array([0.0, 0.0, 1.0])
-    normal[rng.random(count) < 0.05] = np.eye(3)[rng.integers(0, 3)] * rng.choice([-1.0, 1.0])
-    flips = np.flatnonzero(rng.random(count - 1) < 0.03) + 1 if count > 1 else np.array([], dtype=int)
-    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    normal[flips] = -normal[flips - 1]
-    u, v = transported_axes(normal)
-    expected_u, expected_v = transported_frames(normal, False, np.arange(count, dtype=float))
-    assert np.allclose(u, expected_u, atol=1e-10) and np.allclose(v, expected_v, atol=1e-10)
 
 
 def test_derivative_bounds_cover_the_analytic_derivatives():

@@ -13,11 +13,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import cgamesh.pipeline
+import cgamesh.pipelines.scene
 from direction_strategies import direction
 from cgamesh.budget import ResourceLimitError
-from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
-from cgamesh.centerline_tolerance import spheres_around
+from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
+from cgamesh.pipelines.spheres import spheres_around
 from cgamesh.errors import InvalidInputError
 from cgamesh.inputs.centerlines import read_centerlines
 from cgamesh.meshing.junctions import around_within, deviation_bound, uv_spheres
@@ -108,7 +108,7 @@ def test_a_tolerance_run_over_the_budget_is_refused_before_any_mesh_with_a_toler
         raise AssertionError("a mesh was made before the run was priced")
 
     with monkeypatch.context() as patch:
-        patch.setattr(cgamesh.pipeline, "mesh_planned", no_mesh)
+        patch.setattr(cgamesh.pipelines.scene, "mesh_planned", no_mesh)
         with pytest.raises(ResourceLimitError) as refusal:
             mesh_centerlines(lines, TubeOptions(tolerance=1e-4), max_memory="40M", outputs=["tree.glb"])
     message = str(refusal.value)

@@ -254,7 +254,7 @@ def test_the_tracer_never_imports_the_mesher():
     code = ("import sys, importlib, pkgutil, cgamesh.tracer as t\n"
             "for m in pkgutil.iter_modules(t.__path__): importlib.import_module('cgamesh.tracer.' + m.name)\n"
             "import cgamesh_cli.render, cgamesh_cli.verify\n"
-            "bad = [m for m in ('cgamesh.meshing.normals', 'cgamesh.meshing.circles', 'cgamesh.meshing.ribbons', 'cgamesh.pipeline',"
+            "bad = [m for m in ('cgamesh.meshing.normals', 'cgamesh.meshing.circles', 'cgamesh.meshing.ribbons', 'cgamesh.pipelines.scene',"
             " 'clifford', 'matplotlib') if m in sys.modules]\n"
             "print(bad)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from cgamesh.export.gltf import write_glb
-from cgamesh.pipeline import Resolution, mesh_scene
+from cgamesh.pipelines.scene import Resolution, mesh_scene
 from cgamesh.inputs.scene import load_scene
 from cgamesh.tracer import verify
 from cgamesh.tracer.meshfile import read_glb

@@ -14,7 +14,7 @@ import pytest
 
 from cgamesh.errors import ExportError, SceneFileError
 from cgamesh.export.gltf import write_glb
-from cgamesh.pipeline import Resolution, mesh_scene
+from cgamesh.pipelines.scene import Resolution, mesh_scene
 from cgamesh.inputs.scene import load_scene, parse_scene
 from cgamesh.meshing.uv import tangents_of
 

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from cgamesh.errors import CgameshError
 from cgamesh.inputs.scene import parse_scene
-from cgamesh.pipeline import Resolution, mesh_scene, mesh_surface
+from cgamesh.pipelines.scene import Resolution, mesh_scene, mesh_surface
 
 from test_scene_batched import batched_count, mesh_alone
 

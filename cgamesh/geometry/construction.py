@@ -1,6 +1,6 @@
 """Scene specs to evolved surfaces: control objects in their working frame, and the curve.
 
-Both the mesher (cgamesh.pipeline) and the ray tracer (cgamesh.tracer) start here, so a
+Both the mesher (cgamesh.pipelines.scene) and the ray tracer (cgamesh.tracer) start here, so a
 surface means the same thing to both.
 """
 

@@ -37,8 +37,8 @@ from operator import itemgetter
 import numpy as np
 
 from cgamesh.material import Material
-from cgamesh.inputs import scene as careful
-from cgamesh.inputs.scene import CircleControl, Location, PointPairControl, Scene, SurfaceSpec
+from cgamesh.inputs import scene_rules as rules
+from cgamesh.inputs.scene_specs import CircleControl, Location, PointPairControl, Scene, SurfaceSpec
 from cgamesh.inputs.scene_rendering import RENDERING_KEYS
 from cgamesh.inputs.scene_subset import OutsideSubset as _OutsideSubset
 from cgamesh.inputs.scene_subset import plain_document as _plain_document
@@ -66,13 +66,13 @@ def read_fast(text: str, path: str, rendering: bool) -> Scene | None:
 
 # --- checks over the plain data ----------------------------------------------------------------
 
-_TOP_KEYS = frozenset(careful._TOP_KEYS)
-_SURFACE_KEYS = frozenset(careful._SURFACE_KEYS)
-_CIRCLE_KEYS = frozenset(careful._CIRCLE_KEYS)
-_POINT_PAIR_KEYS = frozenset(careful._POINT_PAIR_KEYS)
+_TOP_KEYS = frozenset(rules.TOP_KEYS)
+_SURFACE_KEYS = frozenset(rules.SURFACE_KEYS)
+_CIRCLE_KEYS = frozenset(rules.CIRCLE_KEYS)
+_POINT_PAIR_KEYS = frozenset(rules.POINT_PAIR_KEYS)
 _RESOLUTION_KEYS = frozenset(("around", "along"))
 _MATERIAL_KEYS = frozenset(("color", "roughness", "metallic"))
-_NAME = re.compile(careful.NAME_PATTERN)
+_NAME = re.compile(rules.NAME_PATTERN)
 _DEFAULT_MATERIAL = Material()
 
 
@@ -138,9 +138,9 @@ def _scene(document: dict, keys: int, path: str, rendering: bool) -> Scene:
             _check(not rendering)
             seen += _count_keys(document[key])
     version = document.get("cgamesh")
-    _check(type(version) is int and version in careful.SUPPORTED_VERSIONS)
-    units = _choice(document, "units", "m", tuple(careful.METERS_PER_UNIT))
-    up = _choice(document, "up", "z", careful.UP_AXES)
+    _check(type(version) is int and version in rules.SUPPORTED_VERSIONS)
+    units = _choice(document, "units", "m", tuple(rules.METERS_PER_UNIT))
+    up = _choice(document, "up", "z", rules.UP_AXES)
     items = document.get("surfaces")
     _check(type(items) is list and len(items) > 0)
     names: set[str] = set()
@@ -154,14 +154,14 @@ def _scene(document: dict, keys: int, path: str, rendering: bool) -> Scene:
     for fields, first, last in parts:
         fields["controls"] = built[first:last]
         surfaces.append(_frozen(SurfaceSpec, fields))
-    return Scene(path, version, units, careful.METERS_PER_UNIT[units], up, tuple(surfaces))
+    return Scene(path, version, units, rules.METERS_PER_UNIT[units], up, tuple(surfaces))
 
 
 _MISSING = object()  # a key not written (None is a key written with a null value)
 _PLAIN_SURFACE_KEYS = frozenset(("", "name", "type", "curve", "controls", "resolution",
                                  "tolerance", "closed", "caps", "material"))
-_SURFACE_TYPES, _CURVES = frozenset(careful.SURFACE_TYPES), frozenset(careful.CURVES)
-_CLOSABLE_CURVES = frozenset(careful.CLOSABLE_CURVES)
+_SURFACE_TYPES, _CURVES = frozenset(rules.SURFACE_TYPES), frozenset(rules.CURVES)
+_CLOSABLE_CURVES = frozenset(rules.CLOSABLE_CURVES)
 
 
 def _plain_surfaces(items: list, controls: _Controls,
@@ -232,13 +232,13 @@ def _plain_resolutions(resolutions: list, tolerances: list, kinds: list,
     given = [entries for entries in resolutions if entries is not _MISSING]
     _check(set(map(type, given)) <= {dict} and all(map(_RESOLUTION_KEYS.issuperset, given)))
     seen.keys_seen += sum(map(len, given))
-    arounds = [careful.DEFAULT_AROUND if entries is _MISSING
-               else entries.get("around", careful.DEFAULT_AROUND) for entries in resolutions]
-    alongs = [careful.DEFAULT_ALONG if entries is _MISSING
-              else entries.get("along", careful.DEFAULT_ALONG) for entries in resolutions]
+    arounds = [rules.DEFAULT_AROUND if entries is _MISSING
+               else entries.get("around", rules.DEFAULT_AROUND) for entries in resolutions]
+    alongs = [rules.DEFAULT_ALONG if entries is _MISSING
+              else entries.get("along", rules.DEFAULT_ALONG) for entries in resolutions]
     _check(set(map(type, arounds)) == {int} and set(map(type, alongs)) == {int})
-    _check(min(alongs) >= 2 and max(alongs) <= careful.MAX_RESOLUTION
-           and min(arounds) >= 2 and max(arounds) <= careful.MAX_RESOLUTION)
+    _check(min(alongs) >= 2 and max(alongs) <= rules.MAX_RESOLUTION
+           and min(arounds) >= 2 and max(arounds) <= rules.MAX_RESOLUTION)
     _check(min(compress(arounds, map("circles".__eq__, kinds)), default=3) >= 3)
     if all(value is _MISSING for value in tolerances):
         return arounds, alongs, [None] * len(tolerances)
@@ -266,21 +266,21 @@ def _surface(entries: object, index: int, names: set[str], controls: _Controls,
     get = entries.get
     name, kind, curve = get("name"), get("type"), get("curve")
     _check(type(name) is str and _NAME.fullmatch(name) is not None and name not in names
-           and kind in careful.SURFACE_TYPES and curve in careful.CURVES
+           and kind in rules.SURFACE_TYPES and curve in rules.CURVES
            and type(kind) is str and type(curve) is str)
     names.add(name)
     closed, align, caps = get("closed", False), get("align", True), get("caps", False)
     _check(type(closed) is bool and type(align) is bool and type(caps) is bool)
-    _check(not closed or curve in careful.CLOSABLE_CURVES)
+    _check(not closed or curve in rules.CLOSABLE_CURVES)
     _check(not caps or (kind == "circles" and not closed))
-    interpolation = _choice(entries, "interpolation", "blade", careful.INTERPOLATIONS)
+    interpolation = _choice(entries, "interpolation", "blade", rules.INTERPOLATIONS)
     _check(interpolation == "blade" or kind == "circles")
     first = len(controls.forms)
     key_path = f"surfaces[{index}]"
     controls.add(get("controls"), kind, curve, closed, key_path)
     around, along, tolerance = _resolution(entries, kind, controls)
     material = _material(get("material", _DEFAULT_MATERIAL), controls)
-    uv = _choice(entries, "uv", "natural", careful.UV_MODES)
+    uv = _choice(entries, "uv", "natural", rules.UV_MODES)
     uv_scale = None
     if "uv_scale" in entries:
         uv_scale = _number(entries["uv_scale"])
@@ -314,15 +314,15 @@ def _resolution(entries: dict, kind: str,
         _check(tolerance > 0.0)
         return None, None, tolerance
     if "resolution" not in entries:
-        return careful.DEFAULT_AROUND, careful.DEFAULT_ALONG, None
+        return rules.DEFAULT_AROUND, rules.DEFAULT_ALONG, None
     resolution = entries["resolution"]
     _check(type(resolution) is dict and _RESOLUTION_KEYS.issuperset(resolution))
     seen.keys_seen += len(resolution)
-    around = resolution.get("around", careful.DEFAULT_AROUND)
-    along = resolution.get("along", careful.DEFAULT_ALONG)
+    around = resolution.get("around", rules.DEFAULT_AROUND)
+    along = resolution.get("along", rules.DEFAULT_ALONG)
     least_around = 3 if kind == "circles" else 2
-    _check(type(around) is int and least_around <= around <= careful.MAX_RESOLUTION)
-    _check(type(along) is int and 2 <= along <= careful.MAX_RESOLUTION)
+    _check(type(around) is int and least_around <= around <= rules.MAX_RESOLUTION)
+    _check(type(along) is int and 2 <= along <= rules.MAX_RESOLUTION)
     return around, along, None
 
 
@@ -398,7 +398,7 @@ class _Controls:
             if len(weights) < len(items):
                 weights.append(1.0)  # the controls given no weight
             largest = max(weights)
-            _check(all(weight * careful.MAX_WEIGHT_RATIO >= largest for weight in weights))
+            _check(all(weight * rules.MAX_WEIGHT_RATIO >= largest for weight in weights))
 
     def add_plain_lists(self, lists: list[list], circles: bool,
                         key_paths: list[str]) -> list[tuple[int, int]] | None:
@@ -446,14 +446,14 @@ class _Controls:
 
     def build(self) -> list[CircleControl | PointPairControl]:
         """The specs, in file order, once every number has passed."""
-        limit = careful.MAX_LENGTH
+        limit = rules.MAX_LENGTH
         centers, normals = _vectors(self.centers, limit), _vectors(self.normals)
         radii = _floats(self.radii, limit)
         ends_a, ends_b = _vectors(self.ends_a, limit), _vectors(self.ends_b, limit)
         _check((0.0, 0.0, 0.0) not in normals and (not radii or min(radii) > 0.0))
         if ends_a:
             for i in np.flatnonzero(_maybe_coincident(np.array(ends_a), np.array(ends_b))).tolist():
-                _check(not careful._coincident(ends_a[i], ends_b[i]))
+                _check(not rules.coincident(ends_a[i], ends_b[i]))
         path = self.path
         locations = _with_fields(Location, [{"file": path, "line": line, "key_path": key_path}
                                             for line, key_path in zip(self.lines, self.key_paths)])
@@ -555,7 +555,7 @@ def _maybe_coincident(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     a, b = a / safe, b / safe
     gap = np.linalg.norm(a - b, axis=1)
     size = np.maximum(np.maximum(np.linalg.norm(a, axis=1), np.linalg.norm(b, axis=1)), 1e-300)
-    return gap <= 10.0 * careful._DEGENERATE_RTOL * size
+    return gap <= 10.0 * rules.DEGENERATE_RTOL * size
 
 
 def _through(value: object) -> tuple:
@@ -563,8 +563,8 @@ def _through(value: object) -> tuple:
     _check(type(value) is list and len(value) == 3)
     points = tuple(tuple(_length(c) for c in _triple(point)) for point in value)
     for i, j in ((0, 1), (0, 2), (1, 2)):
-        _check(not careful._coincident(points[i], points[j]))
-    _check(not careful._collinear(*points))
+        _check(not rules.coincident(points[i], points[j]))
+    _check(not rules.collinear(*points))
     return points
 
 
@@ -575,5 +575,5 @@ def _triple(value: object) -> list:
 
 def _length(value: object) -> float:
     value = _number(value)
-    _check(abs(value) <= careful.MAX_LENGTH)
+    _check(abs(value) <= rules.MAX_LENGTH)
     return value

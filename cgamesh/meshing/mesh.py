@@ -24,7 +24,7 @@ class SurfaceMesh:
     double_sided: True for surfaces meant to be seen from both sides (ribbons).
     max_deviation: an upper bound of the largest distance of the mesh from its true surface
                over triangle interiors (file units), for tolerance-driven meshes (the a priori
-               bound of cgamesh.meshing.tolerance_plan, docs/tolerance.md).
+               bound of cgamesh.meshing.tolerance.tolerance_plan, docs/tolerance.md).
 
     Optional, filled by meshers that know them exactly (None: exporters derive what they need):
     tangents:   (V, 4) float64 unit tangents along +u, orthogonal to the normals, and w = +-1 with

@@ -2,8 +2,8 @@
 
 A skeleton or streamline gives centres and radii only; the ring at a node is the circle of
 that centre and radius, and cgamesh chooses its plane: perpendicular to the path, the bisector
-of the unit chords on either side (``centerline_pipeline.node_tangents``), which is the tangent
-of the motor tube's centre curve there (a chord-length Catmull-Rom spline, docs/interpolation.md
+of the unit chords on either side (``cgamesh.pipelines.tubes.node_tangents``), which is the
+tangent of the motor tube's centre curve there (a chord-length Catmull-Rom spline, docs/interpolation.md
 section 2). At a sharp turn onto a short span that thins fast, that ring can leave the radius
 envelope by itself: its inner side reaches over the thin span, nearer to it than to any fat
 part of the centreline (on navis' neuron 722817260, a node of radius 68 at a 70-degree turn

@@ -3,11 +3,11 @@
 Damaged crate (.usdc) files make usd-core abort the process (SIGABRT from C++) or spend
 minutes decompressing an array of billions of elements; no Python code around the call can
 catch either. So ``read_usd`` runs the reading (``readback.read_usd_here``) in a child Python
-process with an address-space limit and a time limit; the child returns the meshes' arrays
+process (``usd_child``) with an address-space limit and a time limit; the child returns the meshes' arrays
 (with their colours and attributes) in a temporary .npz file (no pickles), or one line of error with exit status 2. A child killed
 by a signal, out of memory or out of time becomes one ``UnreadableFileError`` line too.
 
-    python -m cgamesh.readers.usd_sandbox FILE OUT.npz LIMIT     (the child's side)
+    python -m cgamesh.readers.usd_child FILE OUT.npz LIMIT     (the child's side)
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ def read_usd(path, limit: int = MAX_FILE_BYTES) -> list:
             resource.setrlimit(resource.RLIMIT_AS, (space, hard))
 
         try:
-            result = subprocess.run([sys.executable, "-m", "cgamesh.readers.usd_sandbox", name, out, str(limit)],
+            result = subprocess.run([sys.executable, "-m", "cgamesh.readers.usd_child", name, out, str(limit)],
                                     capture_output=True, text=True, errors="replace", timeout=USD_SECONDS,
                                     preexec_fn=limits, env=_child_environment())
         except subprocess.TimeoutExpired:
@@ -82,35 +82,3 @@ def _child_environment() -> dict:
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
     return env
-
-
-def main(argv: list[str]) -> int:
-    from cgamesh.errors import CgameshError
-    from cgamesh.readers.readback import read_usd_here
-
-    name, out, limit = argv[0], argv[1], int(argv[2])
-    try:
-        meshes = read_usd_here(name, limit)
-    except CgameshError as error:
-        print(str(error).replace("\n", " "))
-        return 2
-    except MemoryError:
-        print(f"{name}: reading it needs more memory than the reader allows")
-        return 2
-    arrays = {"names": np.array([m.name for m in meshes], dtype=str),
-              "double_sided": np.array([m.double_sided for m in meshes], dtype=bool)}
-    for k, mesh in enumerate(meshes):
-        for field in FIELDS:
-            arrays[f"{k}_{field}"] = np.asarray(getattr(mesh, field))
-        if mesh.colors is not None:
-            arrays[f"{k}_colors"] = np.asarray(mesh.colors)
-        if mesh.attributes:
-            arrays[f"{k}_attribute_names"] = np.array(list(mesh.attributes), dtype=str)
-            for j, values in enumerate(mesh.attributes.values()):
-                arrays[f"{k}_attribute_{j}"] = np.asarray(values)
-    np.savez(out, **arrays)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))

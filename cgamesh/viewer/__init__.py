@@ -76,7 +76,7 @@ def page_data(scene, meshes: list[tuple[SurfaceMesh, Material]]) -> dict:
 def _cga_objects(scene) -> tuple[list, list]:
     """Control objects and a few interpolated ones, each as the points that fix it (file frame):
     three points on a circle (counter-clockwise about its normal), the two ends of a point pair."""
-    from cgamesh.pipeline import build_surface
+    from cgamesh.pipelines.scene import build_surface
     from cgamesh.geometry.surface import CircleRings
 
     controls, interpolated = [], []

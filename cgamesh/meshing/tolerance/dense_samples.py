@@ -1,7 +1,7 @@
 """A surface read at the tolerance plan's dense samplings, each parameter once.
 
 The plan bounds a surface's members (circle centres, normals and radii; ribbon end points) per
-cell of a sampling at ``segment_samples(segments, cells)`` (cgamesh.meshing.derivative_bounds),
+cell of a sampling at ``segment_samples(segments, cells)`` (cgamesh.meshing.tolerance.derivative_bounds),
 first at a few cells per segment and often again at a finer power of two. The finer sampling's
 parameters include the coarser one's, the same floats (their spacings are powers of two), and a
 parameter's blade and members do not depend on the others read with it (the algebra's products
@@ -18,7 +18,7 @@ import numpy as np
 
 from cgamesh.geometry.objects import circle_euclidean
 from cgamesh.geometry.surface import EvolvedSurface
-from cgamesh.meshing.derivative_bounds import segment_samples
+from cgamesh.meshing.tolerance.derivative_bounds import segment_samples
 
 # Samples read out per call (the projection's batched products slow down beyond).
 SAMPLE_CHUNK = 512

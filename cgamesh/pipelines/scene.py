@@ -4,7 +4,7 @@ Geometry errors found on the way (a projection that vanishes, a degenerate contr
 re-raised with the surface's place in the scene file in front of them.
 
 Every surface is priced before any is meshed (cgamesh.budget): a fixed resolution by its
-vertex count, a tolerance by the a priori estimate of cgamesh.meshing.tolerance_budget (after
+vertex count, a tolerance by the a priori estimate of cgamesh.meshing.tolerance.tolerance_budget (after
 checking it against its floor), the outputs by their formats; a scene that asks for more than
 ``max_memory`` is refused in one line naming the surface and the knob.
 """
@@ -26,9 +26,9 @@ from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.circles import mesh_circle_surface
 from cgamesh.meshing.ribbons import mesh_ribbon_surface
 from cgamesh.inputs.scene import Scene, SurfaceSpec
-from cgamesh.meshing.tessellation import mesh_to_tolerance, ribbon_to_tolerance
-from cgamesh.meshing.tolerance_budget import estimate as tolerance_estimate
-from cgamesh.meshing.tolerance_budget import TOLERANCE_FLOOR, tolerance_floor
+from cgamesh.meshing.tolerance.tessellation import mesh_to_tolerance, ribbon_to_tolerance
+from cgamesh.meshing.tolerance.tolerance_budget import estimate as tolerance_estimate
+from cgamesh.meshing.tolerance.tolerance_budget import TOLERANCE_FLOOR, tolerance_floor
 
 
 FLOAT32_MAX = float(np.finfo(np.float32).max)
@@ -63,7 +63,7 @@ def _fitting(tolerance: float | None, needed: float):
     """A refusal's advice of about the tolerance that would fit; None at a fixed resolution."""
     if tolerance is None:
         return None
-    from cgamesh.meshing.tolerance_budget import fitting_advice
+    from cgamesh.meshing.tolerance.tolerance_budget import fitting_advice
 
     return fitting_advice(tolerance, needed)
 

@@ -21,7 +21,7 @@ d/ds (...) = -gamma_t d' (x_ss = 0). The bounds of gamma: the component of d' al
 u = x_t minus its part along d, |u| = |x_t x d| / |d|, gives |gamma_t| <= |d'| |d| / |x_t x d|;
 along d, |gamma_s| <= (|d'| + |gamma_t| |x_t|) / |d|.
 
-Per cell of the derivative sampling (cgamesh.meshing.derivative_bounds) this needs a lower
+Per cell of the derivative sampling (cgamesh.meshing.tolerance.derivative_bounds) this needs a lower
 bound of |x_t x d| over the cell and s in [0, 1] (zero where the ribbon folds: the bound is then
 not used), an upper bound of |det(a', d, d')|, of |d''|, of |x_t| and a lower bound of |d|.
 """
@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cgamesh.meshing.derivative_bounds import CellDerivatives, lengths
+from cgamesh.meshing.tolerance.derivative_bounds import CellDerivatives, lengths
 
 
 def ribbon_twist_terms(a: CellDerivatives, b: CellDerivatives, d: CellDerivatives, d_values: np.ndarray,

@@ -11,14 +11,14 @@ of the true surface, where sag is the chord sag around (r (1 - cos(pi / M)) for 
 straight rulings), A bounds |d^2 x / dt^2| and B |d^2 x / dt dtheta| over the quad (the twist
 term) and k' the chord's length per unit of r (2 sin(pi / M)) or the fraction across (1 / (N - 1)).
 A and B come from bounds of the members' derivatives per cell of a dense sampling
-(cgamesh.meshing.derivative_bounds): for circles |c''|, |r'|, |r''|, |n'|, |n''| and the
+(cgamesh.meshing.tolerance.derivative_bounds): for circles |c''|, |r'|, |r''|, |n'|, |n''| and the
 frame's angular velocity; for ribbons |a''|, |b''| and |(b - a)'|. For circles two more bounds
 count only the twist's part across the surface: a reparametrisation of each triangle removes
 its shear along P_t and P_theta (docs/tolerance.md, "The twist's normal part"), and the error
 is projected on the surface's normal, its tangential part costing only the curvature over a
-short step (cgamesh.meshing.normal_projection): an interval's E is the smallest of the three.
+short step (cgamesh.meshing.tolerance.normal_projection): an interval's E is the smallest of the three.
 For ribbons the bubble removes the twist's tangential part, or only the rulings' stretching
-(cgamesh.meshing.ribbon_twist): E is the smallest of the lemma's and those.
+(cgamesh.meshing.tolerance.ribbon_twist): E is the smallest of the lemma's and those.
 
 From these, per cell and for each candidate count around, the spacing h whose bound meets the
 tolerance gives a ring density 1 / h; its integral per segment is the ring count, so the count
@@ -27,7 +27,8 @@ cheap: usable by a resource budget before any mesh-sized allocation). Rings are 
 equidistributing that density in one pass, segment joints always rings; intervals whose
 bound (maxima over every cell they touch) still exceeds the tolerance have their density raised
 and are placed again, and any left are split evenly. The plan's ``bound`` is the largest E over
-its intervals: at most the tolerance, by construction.
+its intervals: at most the tolerance, by construction. The bounds and spacings themselves, per
+cell and per interval, are cgamesh.meshing.tolerance.quad_bounds'.
 """
 
 from __future__ import annotations
@@ -40,13 +41,10 @@ import numpy as np
 from cgamesh.errors import InvalidInputError
 from cgamesh.geometry.objects import circle_euclidean
 from cgamesh.geometry.surface import EvolvedSurface
-from cgamesh.meshing.ring_frames import transported_frames
-from cgamesh.meshing.dense_samples import DenseSamples, circle_members, pair_members, read_blades
-from cgamesh.meshing.dense_transport import transported_axes
-from cgamesh.meshing.derivative_bounds import cell_derivatives, lengths, segment_samples
-from cgamesh.meshing.normal_projection import (full_second_derivatives, normal_projection_error,
-                                               normal_projection_spacing, spin_bounds)
-from cgamesh.meshing.ribbon_twist import ribbon_twist_error, ribbon_twist_spacing, ribbon_twist_terms
+from cgamesh.meshing.tolerance.dense_samples import DenseSamples, circle_members, pair_members, read_blades
+from cgamesh.meshing.tolerance.derivative_bounds import segment_samples
+from cgamesh.meshing.tolerance.quad_bounds import (Cells, circle_cells, circle_error, circle_spacing, holonomy,
+                                                   ribbon_cells, ribbon_error, ribbon_spacing)
 
 # Cells per segment of the derivative sampling: at least this many, and about this many per
 # ring of a first estimate (the Lipschitz margin shrinks with the cells; the cost grows).
@@ -58,8 +56,6 @@ AROUND_CANDIDATES = 48
 MAX_ACROSS = 64
 # Candidates priced in the first, coarse pass of the choice (every this many).
 COARSE_STRIDE = 4
-# Angles at which the largest |d2x/dt2| around a circle is looked for (plus a margin between).
-ANGLES = 32
 # Rounds of raising the density where an interval's bound misses, before splitting it.
 DENSITY_ROUNDS = 4
 # Rings are placed again with a lowered density when their intervals' bounds average below
@@ -96,222 +92,6 @@ class PlannedCounts:
     rings: int
 
 
-@dataclass(frozen=True)
-class _Cells:
-    """Per-cell bound terms (segments, cells) of a surface's members, in world units."""
-
-    cells: int
-    terms: dict
-    closed_rate: float  # angular rate of a closed loop's holonomy correction, about n
-
-    @property
-    def segments(self) -> int:
-        return next(iter(self.terms.values())).shape[0]
-
-
-def _circle_cells(surface: EvolvedSurface, cells: int, closed: bool, members: tuple) -> _Cells:
-    """Per cell: A >= |d2x/dt2| and B >= |d2x/dt dtheta| for x = c + r (cos theta u + sin theta v)
-    in the sampled transported frame (u, v), their vectors combined (no triangle inequality
-    between the centre's, the radius' and the frame's parts), the largest radius, |n'| and |n''|.
-    members: the circles' (centre, normal, radius) at ``segment_samples(segments, cells)``, segment-major."""
-    centre, normal, radius = members
-    u, v = transported_axes(normal)
-    shape = (surface.segment_count, cells + 1)
-    scale = surface.frame.scale
-    grid = lambda values: values.reshape(shape + values.shape[1:])  # noqa: E731
-    # One call on the members side by side (fewer, larger array operations; the same bits).
-    bounds = cell_derivatives(grid(np.concatenate(
-        [centre, radius[:, None] * u, radius[:, None] * v, radius[:, None], normal], axis=1)))
-    path, cosine, sine = bounds.columns(0, 3), bounds.columns(3, 6), bounds.columns(6, 9)
-    r0, r1, _ = bounds.columns(9, 10).norms()
-    _, n1, n2 = bounds.columns(10, 13).norms()
-    # max over theta of |G| = |a + B cos theta + C sin theta|: on ANGLES angles, plus the most
-    # g = |G|^2 can grow from the nearest of them to a maximum between (where g' = 0):
-    # (spacing^2 / 8) max |g''|, with g'' = 2 |G'|^2 + 2 G . G'' and |G'|, |G''| <= reach.
-    a, b, c = path.second, cosine.second, sine.second
-    on_circle = _on_circle(a, b, c, 2.0 * np.pi * np.arange(ANGLES) / ANGLES)
-    reach = np.sqrt(lengths(b) ** 2 + lengths(c) ** 2)
-    curvature = 4.0 * reach * reach + 2.0 * lengths(a) * reach  # >= max |g''|
-    spacing = 2.0 * np.pi / ANGLES
-    largest = np.sqrt(on_circle.max(axis=-1) ** 2 + spacing * spacing / 8.0 * curvature)
-    along = (largest + lengths(path.second_radius)
-             + np.hypot(lengths(cosine.second_radius), lengths(sine.second_radius)))
-    # max over theta of |-sin theta B1 + cos theta C1|: the larger singular value of [B1 C1].
-    b1, c1 = cosine.first, sine.first
-    bb, cc, bc = np.sum(b1 * b1, -1), np.sum(c1 * c1, -1), np.sum(b1 * c1, -1)
-    largest = np.sqrt(0.5 * (bb + cc) + np.sqrt(0.25 * (bb - cc) ** 2 + bc * bc))
-    twist = largest + np.hypot(lengths(cosine.first_radius), lengths(sine.first_radius))
-    # The frame's part of d2x/dt2 alone, max over theta of |(r u)'' cos + (r v)'' sin|: the larger
-    # singular value of [(r u)'', (r v)''] (the twist's change along t, for the normal twist bound).
-    b2, c2 = cosine.second, sine.second
-    bb, cc, bc = np.sum(b2 * b2, -1), np.sum(c2 * c2, -1), np.sum(b2 * c2, -1)
-    turning = (np.sqrt(0.5 * (bb + cc) + np.sqrt(0.25 * (bb - cc) ** 2 + bc * bc))
-               + np.hypot(lengths(cosine.second_radius), lengths(sine.second_radius)))
-    axial, across = _axial_speed(grid(normal), path, n1)
-    sampled = grid(radius)
-    least = np.maximum(np.minimum(sampled[:, :-1], sampled[:, 1:]) - 0.5 * r1 / cells, 0.0)  # <= r in the cell
-    terms = dict(A=scale * along, B=scale * twist, Rm=scale * r0, N1=n1, N2=n2, Ar=scale * turning,
-                 R1=scale * r1, Cx=scale * across, negCn=-scale * axial, negRmin=-scale * least)
-    return _Cells(cells, terms, _turn(u, normal) / surface.segment_count if closed else 0.0)
-
-
-def _on_circle(a: np.ndarray, b: np.ndarray, c: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    """|a + cos(angle) b + sin(angle) c| (..., angles) of vectors (..., 3): the terms formed one
-    component at a time on contiguous (..., angles) arrays rather than (..., angles, 3) ones, the
-    squares summed x, y, z in order as ``lengths`` (np.sum of three numbers) sums them: the same
-    bits at a third of the time."""
-    cosine, sine = np.cos(angles), np.sin(angles)
-    squared = None
-    for k in range(3):
-        term = a[..., k, None] + cosine * b[..., k, None]
-        term += sine * c[..., k, None]
-        term *= term
-        squared = term if squared is None else squared + term
-    return np.sqrt(squared, out=squared)
-
-
-def _axial_speed(normal: np.ndarray, path, n1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per cell: a lower bound of |n . c'| and an upper bound of |n x c'| (the centre's speed along
-    and across the circle's axis). In a cell, c' is within its radius of the divided difference D1
-    and n within delta |n'| of its value at the cell's start."""
-    start, d1 = normal[:, :-1], path.first
-    spread = lengths(path.first_radius)
-    delta = 1.0 / d1.shape[1]
-    slack = delta * n1 * (lengths(d1) + spread) + spread
-    along = np.abs(np.sum(start * d1, axis=-1))
-    across = lengths(np.cross(start, d1))
-    return np.maximum(along - slack, 0.0), across + slack
-
-
-def _holonomy(normal: np.ndarray, t: np.ndarray) -> float:
-    """|angle| by which transport around a closed loop of these normals turns its frame."""
-    u, _ = transported_frames(normal, False, t)
-    return _turn(u, normal)
-
-
-def _turn(u: np.ndarray, normal: np.ndarray) -> float:
-    """|angle| between the first and the last of transported axes u (the loop's holonomy)."""
-    return abs(float(np.arctan2(np.dot(np.cross(u[0], u[-1]), normal[0]), np.dot(u[0], u[-1]))))
-
-
-def _ribbon_cells(surface: EvolvedSurface, cells: int, members: tuple) -> _Cells:
-    a, b = members  # the end points at segment_samples(segments, cells), segment-major
-    shape = (surface.segment_count, cells + 1, 3)
-    scale = surface.frame.scale
-    # One call on the members side by side, as for circles (the same bits as three).
-    bounds = cell_derivatives(np.concatenate([a, b, b - a], axis=1).reshape(shape[:2] + (9,)))
-    ends, other, across = bounds.columns(0, 3), bounds.columns(3, 6), bounds.columns(6, 9)
-    _, _, a2 = ends.norms()
-    _, _, b2 = other.norms()
-    _, d1, _ = across.norms()
-    terms = dict(A=scale * np.maximum(a2, b2), B=scale * d1)
-    terms.update(ribbon_twist_terms(ends, other, across, (b - a).reshape(shape), scale))
-    return _Cells(cells, terms, 0.0)
-
-
-def _circle_error(terms: dict, h, around, rate: float, wide: dict | None = None):
-    """E for intervals of length h with the given term maxima and M = around (broadcasting).
-
-    The mesh's frame on an interval is the smallest rotation from the first ring's plane,
-    which spins about n relative to the sampled transport by psi' (at most turned |n'| / q,
-    plus a closed loop's holonomy rate): x(t, theta) = x_G(t, theta + psi(t)) adds
-    2 B psi' + r (psi'^2 + |psi''|) to A and r psi' to B. With ``wide`` (the maxima over each
-    interval widened within its segment), the bound by the error normal to the surface
-    (cgamesh.meshing.normal_projection) is a third one: E is the smallest."""
-    n1, rm = terms["N1"], terms["Rm"]
-    turned = h * n1  # bounds |n(t) - n(t_k)| over the interval
-    spin, spin_rate = spin_bounds(n1, terms["N2"], turned, rate)
-    a, b = full_second_derivatives(terms, spin, spin_rate)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        sag = rm * (1.0 - np.cos(np.pi / around))
-        error = sag + a * h * h / 8.0 + b * h * np.sin(np.pi / around) / 2.0
-        error = np.minimum(error, sag + _normal_twist_error(terms, h, around, a, b, spin, spin_rate))
-    if wide is not None:  # the third bound, on the same mesh frame
-        error = np.minimum(error, normal_projection_error(terms, wide, h, around, rate, (spin, spin_rate, a, b)))
-    return np.where(turned < 1.0, error, np.inf)
-
-
-def _normal_twist_error(terms: dict, h, around, a, b, spin, spin_rate):
-    """The bound of the quad's error without the twist's tangential part (see _normal_twist_terms)."""
-    square, linear, valid = _normal_twist_terms(terms, around, a, b, spin, spin_rate)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        valid = valid & (h * terms["R1"] <= -terms["negRmin"])  # h |gamma_theta| <= 1
-    return np.where(valid, square * h * h + linear * h, np.inf)
-
-
-def _normal_twist_terms(terms: dict, around, a, b, spin, spin_rate):
-    """(square, linear, valid): A^ h^2 / 8 + B^ h k / 4 + C^ k^2 / 8 = square h^2 + linear h for the
-    map g = P(Phi), where Phi moves each triangle's points by h k gamma lambda_i lambda_j (the
-    bubble of its diagonal, zero at the vertices; it stays in the quad while k |gamma_t| <= 1 and
-    h |gamma_theta| <= 1), so that the twist of g is P_t theta - gamma_t P_t - gamma_theta P_theta:
-    the shear along the ring's axis and around it removed (docs/tolerance.md, "The twist's
-    normal part"). a, b: the full bounds of |P_tt| and |P_t theta| / |L'|; spin, spin_rate: the
-    mesh frame's |psi'|, |psi''|. valid is False where the centre does not move along the axis
-    enough (or the radius changes too fast) for the shear to be removed."""
-    rm, n1 = terms["Rm"], terms["N1"]
-    k = 2.0 * np.pi / around
-    chord = 2.0 * np.sin(np.pi / around) / k  # |L'|
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        rn1, rspin = rm * n1, rm * spin  # each computed once (the same bits as in each term)
-        axial = -terms["negCn"] - rn1  # <= |n . P_t|
-        gamma = rn1 / axial * chord  # >= |gamma_t|
-        shear = terms["R1"] / -terms["negRmin"]  # >= |gamma_theta| = |r'| / r
-        tilt = np.minimum(1.0, (terms["Cx"] + terms["R1"] + rspin) / axial)  # >= |n x P_t| / |P_t|
-        rest = rspin + rn1 * tilt  # >= |P_t theta - gamma . J| / |L'| where gamma is chosen
-        turning = terms["Ar"] + 2.0 * terms["B"] * spin + rm * (spin * spin + spin_rate)  # >= |(r F)''|
-        twist = chord * b  # >= |P_t theta|
-        reach = k * gamma
-        lift = 1.0 + reach
-        a_hat = lift ** 2 * a + 2.0 * lift * k * shear * twist
-        # B^ = B0 + h B1 (B0: the twist left at the quad's middle; B1: its change over the quad and
-        # what Phi's slopes add); C^ = h C1 + h^2 C2.
-        b0 = chord * rest + 1.5 * k * gamma * twist
-        b1 = (0.5 * chord * turning + 0.5 * gamma * a + 1.5 * shear * twist + 2.0 * k * gamma * shear * twist
-              + lift * gamma * a)
-        c1 = 2.0 * gamma * twist
-        c2 = gamma * gamma * a + 2.0 * gamma * shear * twist
-        square = a_hat / 8.0 + k / 4.0 * b1 + k * k / 8.0 * c2
-        linear = k / 4.0 * b0 + k * k / 8.0 * c1
-        valid = (axial > 0.0) & (reach <= 1.0) & np.isfinite(shear) & np.isfinite(square) & np.isfinite(linear)
-    return square, linear, valid
-
-
-def _ribbon_error(terms: dict, h, across, rate: float = 0.0):
-    """E of ribbon quads: the lemma's bound, or the one without the twist's tangential part
-    (cgamesh.meshing.ribbon_twist) where that is smaller."""
-    full = terms["A"] * h * h / 8.0 + terms["B"] * h / (4.0 * (across - 1))
-    return np.minimum(full, ribbon_twist_error(terms, h, across))
-
-
-def _circle_spacing(terms: dict, around, tolerance: float, rate: float):
-    """Per cell (and candidate M) the spacing h meeting the tolerance, leading terms only."""
-    rm = terms["Rm"]
-    full = terms["A"] + 2.0 * terms["B"] * rate + rm * rate * rate
-    twist = terms["B"] + rm * rate
-    c = tolerance - rm * (1.0 - np.cos(np.pi / around))
-    spacing = _root(full / 8.0, twist * np.sin(np.pi / around) / 2.0, c)
-    # The normal twist bound with its leading terms (spin = rate, no spin rate); its condition
-    # h |gamma_theta| <= 1 is checked when the rings are bounded.
-    square, linear, valid = _normal_twist_terms(terms, around, full, twist, rate, 0.0)
-    normal = np.where(valid, _root(np.where(valid, square, 1.0), np.where(valid, linear, 1.0), c), 0.0)
-    projected = normal_projection_spacing(terms, around, tolerance, rate, _root)
-    return np.maximum(np.maximum(spacing, normal), projected)
-
-
-def _ribbon_spacing(terms: dict, across, tolerance: float, rate: float = 0.0):
-    c = np.full(np.shape(terms["A"]), tolerance)
-    full = _root(terms["A"] / 8.0, terms["B"] / (4.0 * (across - 1)), c)
-    return np.maximum(full, ribbon_twist_spacing(terms, across, c, _root))
-
-
-def _root(a, b, c):
-    """Positive root h of a h^2 + b h = c (0 where c <= 0, inf where a = b = 0)."""
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        h = 2.0 * c / (b + np.sqrt(b * b + 4.0 * a * np.maximum(c, 0.0)))
-    # NaN (0 / 0, inf / inf) is inf; a, b >= 0 (bounds), so h is never -inf where c > 0
-    return np.where(c > 0.0, np.where(np.isnan(h), np.inf, h), 0.0)
-
-
 def _ring_counts(density: np.ndarray, cells: int) -> np.ndarray:
     """Intervals per segment (..., segments) for densities (..., segments, cells)."""
     with np.errstate(over="ignore", invalid="ignore"):
@@ -326,21 +106,21 @@ class _Surface:
         self.surface, self.kind, self.closed = surface, kind, closed
         self._samples = DenseSamples(surface, circle_members if kind == "circles" else pair_members)
 
-    def cells(self, count: int) -> _Cells:
+    def cells(self, count: int) -> Cells:
         members = self._samples.read(count)
         if self.kind == "circles":
-            return _circle_cells(self.surface, count, self.closed, members)
-        return _ribbon_cells(self.surface, count, members)
+            return circle_cells(self.surface, count, self.closed, members)
+        return ribbon_cells(self.surface, count, members)
 
     def error(self, terms, h, around, rate, wide=None):
         if self.kind == "circles":
-            return _circle_error(terms, h, around, rate, wide)
-        return _ribbon_error(terms, h, around, rate)
+            return circle_error(terms, h, around, rate, wide)
+        return ribbon_error(terms, h, around, rate)
 
     def spacing(self, terms, around, tolerance, rate):
-        return (_circle_spacing if self.kind == "circles" else _ribbon_spacing)(terms, around, tolerance, rate)
+        return (circle_spacing if self.kind == "circles" else ribbon_spacing)(terms, around, tolerance, rate)
 
-    def candidates(self, cells: _Cells, tolerance: float) -> np.ndarray:
+    def candidates(self, cells: Cells, tolerance: float) -> np.ndarray:
         if self.kind != "circles":
             return np.arange(2, MAX_ACROSS + 1)
         largest = float(cells.terms["Rm"].max())
@@ -360,7 +140,7 @@ class _Surface:
         return around + 1 if self.kind == "circles" else around
 
 
-def _choose_counts(family: _Surface, cells: _Cells, tolerance: float) -> tuple[int, np.ndarray, np.ndarray]:
+def _choose_counts(family: _Surface, cells: Cells, tolerance: float) -> tuple[int, np.ndarray, np.ndarray]:
     """(around, density (segments, cells), intervals per segment) minimising planned vertices.
 
     The planned vertices against the count around fall, then rise (the sag's share of the
@@ -376,7 +156,7 @@ def _choose_counts(family: _Surface, cells: _Cells, tolerance: float) -> tuple[i
     return int(fine[chosen]), density, counts
 
 
-def _price(family: _Surface, cells: _Cells, tolerance: float, options: np.ndarray):
+def _price(family: _Surface, cells: Cells, tolerance: float, options: np.ndarray):
     """(index of the option with the fewest planned vertices, its density, its counts)."""
     terms = {k: v[None] for k, v in cells.terms.items()}
     with np.errstate(divide="ignore"):
@@ -441,7 +221,7 @@ class _RangeMax:
         return np.maximum(self.levels[level, first], self.levels[level, last - (1 << level) + 1])
 
 
-def _interval_errors(family: _Surface, cells: _Cells, table: _RangeMax, names, t: np.ndarray, around: int):
+def _interval_errors(family: _Surface, cells: Cells, table: _RangeMax, names, t: np.ndarray, around: int):
     """The bound E of every interval [t_k, t_k+1] (K-1,), with the maxima over every cell it touches,
     and the first and last cell indices."""
     first, last = _touched(cells, t)
@@ -459,7 +239,7 @@ def _named(names, maxima: np.ndarray) -> dict:
     return {name: maxima[:, i] for i, name in enumerate(names)}
 
 
-def _touched(cells: _Cells, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _touched(cells: Cells, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The first and last cell each interval [t_k, t_k+1] touches (np.minimum and np.maximum
     rather than np.clip: the same integers, at less overhead on the few intervals of a plan)."""
     n = cells.segments * cells.cells
@@ -468,7 +248,7 @@ def _touched(cells: _Cells, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return first, last
 
 
-def _widened(cells: _Cells, table: _RangeMax, names, t: np.ndarray) -> dict:
+def _widened(cells: Cells, table: _RangeMax, names, t: np.ndarray) -> dict:
     """Per interval the term maxima over it widened by ``margin`` = min(h, its distance to its
     segment's ends) on each side: where the normal projection's step along t may reach (never
     across a joint, where the members are not twice differentiable)."""
@@ -478,7 +258,7 @@ def _widened(cells: _Cells, table: _RangeMax, names, t: np.ndarray) -> dict:
     return wide
 
 
-def _widened_range(cells: _Cells, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _widened_range(cells: Cells, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(first cell, last cell, margin) of each interval widened as ``_widened`` says."""
     segment = np.minimum(np.maximum(np.floor(t[:-1]), 0), cells.segments - 1)
     margin = np.maximum(np.minimum(np.minimum(t[1:] - t[:-1], t[:-1] - segment), segment + 1.0 - t[1:]), 0.0)
@@ -500,7 +280,7 @@ class _IntervalErrors:
         self.family, self.table, self.names, self.around = family, table, names, around
         self._known: dict = {}
 
-    def __call__(self, cells: _Cells, t: np.ndarray):
+    def __call__(self, cells: Cells, t: np.ndarray):
         key = (t.tobytes(), cells.cells, cells.closed_rate)
         if key not in self._known:
             if len(self._known) >= self.KEEP:
@@ -509,7 +289,7 @@ class _IntervalErrors:
         return self._known[key]
 
 
-def _plan(family: _Surface, tolerance: float) -> tuple[_Cells, int, np.ndarray, np.ndarray]:
+def _plan(family: _Surface, tolerance: float) -> tuple[Cells, int, np.ndarray, np.ndarray]:
     """The sampled cells, the count around and the per-cell density and counts for ``tolerance``."""
     if not (math.isfinite(tolerance) and tolerance > 0.0):
         raise InvalidInputError(f"tolerance must be a finite number > 0, got {tolerance!r}")
@@ -563,7 +343,7 @@ def plan_tolerance(surface: EvolvedSurface, tolerance: float, kind: str = "circl
     return PreparedPlan(surface, tolerance, kind, closed).place()
 
 
-def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarray, counts: np.ndarray,
+def _place_rings(family: _Surface, cells: Cells, around: int, density: np.ndarray, counts: np.ndarray,
                  tolerance: float) -> TolerancePlan:
     """Rings equidistributing ``density``, raised where an interval's bound misses (see the module doc)."""
     surface, kind, closed = family.surface, family.kind, family.closed
@@ -591,7 +371,7 @@ def _place_rings(family: _Surface, cells: _Cells, around: int, density: np.ndarr
         # bound again with its rate until the rate assumed covers it.
         for _ in range(HOLONOMY_ROUNDS):
             _, normal, _ = circle_euclidean(read_blades(surface, t))
-            rate = _holonomy(normal, t) / surface.segment_count
+            rate = holonomy(normal, t) / surface.segment_count
             if rate <= cells.closed_rate:
                 break
             cells = replace(cells, closed_rate=rate * HOLONOMY_MARGIN)

@@ -1,11 +1,11 @@
 """Centreline inputs meshed to a tolerance: every chain planned, the whole run priced, then meshed.
 
-Each chain's tube is planned by the tolerance's a priori bound (cgamesh.meshing.tolerance_plan)
+Each chain's tube is planned by the tolerance's a priori bound (cgamesh.meshing.tolerance.tolerance_plan)
 before any mesh is made, and priced as it is planned (``TolerancePrice``, the spheres' vertices
 counted first): the merged mesh, the largest meshing transient and the largest export against
 the memory budget, refused as soon as the spheres and the chains so far exceed it, with about
-the tolerance that would fit. The junction and soma
-spheres get the fewest vertices around that keep them within the tolerance (``spheres_around``,
+the tolerance that would fit. The junction and soma spheres get the fewest vertices around that
+keep them within the tolerance (cgamesh.pipelines.spheres.spheres_around,
 cgamesh.meshing.junctions.deviation_bound; docs/tolerance.md, "Junction and soma spheres").
 Then the chains are meshed from their plans, each plan let go once its mesh is made.
 """
@@ -17,18 +17,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.centerline_pipeline import (Centerlines, TubeOptions, _Chain, _take, _tube_finish, _tube_spec,
-                                         _TubeSpec, sphere_groups)
 from cgamesh.errors import CgameshError, InvalidInputError
+from cgamesh.inputs.centerlines import Centerlines
+from cgamesh.pipelines.chains import Chain, take_chain
+from cgamesh.pipelines.spheres import sphere_groups
+from cgamesh.pipelines.tube_options import TubeOptions
+from cgamesh.pipelines.tubes import TubeSpec, finish_tube, tube_spec
 
 
 @dataclass
 class PlannedTube:
     """A chain planned under a tolerance: its tube's spec and the plan priced (SurfacePlan)."""
 
-    chain: _Chain
+    chain: Chain
     index: int
-    tube: _TubeSpec
+    tube: TubeSpec
     plan: object
 
 
@@ -37,13 +40,13 @@ def plan_tubes(chains, points, radii, soma, tangents, segment_of, lines, options
     """Every chain's tube planned to the tolerance (counts chosen, nothing mesh-sized made), in
     chain order, each priced as it is planned (``price`` refuses as soon as the run cannot fit);
     a chain that cannot be planned is skipped (``skipped``), or raises when strict."""
-    from cgamesh.pipeline import Resolution, plan_surface
+    from cgamesh.pipelines.scene import Resolution, plan_surface
 
     planned = []
     done = np.cumsum(chains.counts)  # nodes planned after each chain
     for index, chain in enumerate(chains):
         try:
-            tube = _tube_spec(chain, index, points, radii, soma, tangents, segment_of, lines, options, stem)
+            tube = tube_spec(chain, index, points, radii, soma, tangents, segment_of, lines, options, stem)
             if tube is not None:
                 planned.append(PlannedTube(chain, index, tube, plan_surface(tube.spec, Resolution())))
         except CgameshError as error:
@@ -61,7 +64,7 @@ class TolerancePrice:
     """What a tolerance run of centrelines will hold and allocate, summed as its chains are
     planned: the merged mesh's bytes, the largest meshing transient of one tube and the largest
     export of ``outputs``; refused (ResourceLimitError) as soon as it exceeds the budget, with
-    about the tolerance that would fit (cgamesh.meshing.tolerance_budget.fitting_tolerance)."""
+    about the tolerance that would fit (cgamesh.meshing.tolerance.tolerance_budget.fitting_tolerance)."""
 
     def __init__(self, lines: Centerlines, tolerance: float, max_memory, outputs: Sequence[str],
                  sphere_vertices: int):
@@ -100,19 +103,19 @@ class TolerancePrice:
                                                  f"{self.vertices + self.spheres} vertices)")
 
     def _refuse(self, needed: int, what: str) -> None:
-        from cgamesh.meshing.tolerance_budget import fitting_advice
+        from cgamesh.meshing.tolerance.tolerance_budget import fitting_advice
 
         self.budget.require(needed, self.where, what, fitting_advice(self.tolerance, needed))
 
 
 def mesh_planned_tubes(planned: list[PlannedTube], scalar, options, stem, skipped, progress, sink) -> None:
     """Mesh the planned tubes in order into ``sink``, each plan let go once its mesh is made."""
-    from cgamesh.pipeline import mesh_planned
+    from cgamesh.pipelines.scene import mesh_planned
 
     for k, item in enumerate(planned):
         planned[k] = None  # the plan's cells go with it
-        _take(lambda: _tube_finish(item.tube, mesh_planned(item.plan, False), item.chain, item.index, scalar,
-                                   options, stem), options, skipped, sink)
+        take_chain(lambda: finish_tube(item.tube, mesh_planned(item.plan, False), item.chain, item.index, scalar,
+                                       options, stem), options, skipped, sink)
         progress(item.chain.label)
 
 
@@ -147,20 +150,3 @@ def sphere_size(lines: Centerlines, radii, junctions, soma, options: TubeOptions
     except InvalidInputError as error:
         raise InvalidInputError(f"{lines.source}: {error}") from None
     return vertices, triangles
-
-
-def spheres_around(radii: np.ndarray, tolerance: float) -> np.ndarray:
-    """Per sphere the fewest vertices around whose UV sphere lies within ``tolerance`` of it
-    (cgamesh.meshing.junctions.around_within), from one table of the bound over the counts up to
-    the largest sphere's. InvalidInputError when a sphere needs more than junctions.MAX_AROUND."""
-    from cgamesh.meshing.junctions import around_within, deviation_bound
-
-    try:
-        largest = around_within(float(radii.max()), tolerance)
-    except ValueError as error:
-        raise InvalidInputError(f"tolerance {tolerance:g} is too small for the junction and soma spheres: "
-                                f"{error}") from None
-    counts = np.arange(4, largest + 1)
-    # the least bound up to each count: the fewest count meeting a bound is where this first does
-    least = np.minimum.accumulate([deviation_bound(int(m)) for m in counts])
-    return counts[np.searchsorted(-least, -tolerance / radii)]

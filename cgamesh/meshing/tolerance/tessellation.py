@@ -1,12 +1,12 @@
 """Tolerance-driven tessellation: meshes within a distance of the true surface, from a priori bounds.
 
 A tolerance is the largest distance the mesh may stray from the true surface, over triangle
-interiors (file units). ``cgamesh.meshing.tolerance_plan`` chooses the count around (across a
+interiors (file units). ``cgamesh.meshing.tolerance.tolerance_plan`` chooses the count around (across a
 ribbon) and the ring parameters from bounds of the surface's derivatives, with the split of
 the tolerance between chords around and spacing along that needs the fewest vertices; the mesh
 is then made once, by the ordinary mesher, on those rings. Nothing is measured: the mesh's
 ``max_deviation`` is the plan's bound, a proven upper bound of the deviation (docs/tolerance.md),
-which cgamesh.meshing.deviation and the tests' independent measure check.
+which cgamesh.meshing.tolerance.deviation and the tests' independent measure check.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from cgamesh.meshing.circles import (DISTINCT_RING_FRACTION, distinct_rings, kep
                                      read_rings)
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.ribbons import mesh_ribbon_surface
-from cgamesh.meshing.tolerance_plan import PreparedPlan, TolerancePlan
+from cgamesh.meshing.tolerance.tolerance_plan import PreparedPlan, TolerancePlan
 
 
 def _plan(surface: EvolvedSurface, tolerance: float, kind: str, closed: bool,

@@ -60,7 +60,7 @@ def tolerance_floor(surface: EvolvedSurface) -> float:
 
 def estimate(surface: EvolvedSurface, tolerance: float, closed: bool = False) -> ToleranceCost:
     """The a priori size and memory of meshing ``surface`` to ``tolerance`` (see the module doc)."""
-    from cgamesh.meshing.tolerance_plan import PreparedPlan
+    from cgamesh.meshing.tolerance.tolerance_plan import PreparedPlan
 
     kind = "circles" if surface.grade == 3 else "point_pairs"
     prepared = PreparedPlan(surface, tolerance, kind, closed)
