@@ -105,7 +105,7 @@ class CircleMeshes:
         vs, ve, fs, fe = self.vertex_first[s], self.vertex_first[s + 1], self.face_first[s], self.face_first[s + 1]
         positions, normals, uvs = self.positions[vs:ve], self.normals[vs:ve], self.uvs[vs:ve]
         tangents = None if self.tangents is None else self.tangents[vs:ve]
-        faces = self.faces[fs:fe] - np.int32(vs)
+        faces = self.faces[fs:fe] - np.int32(vs) if vs else self.faces[fs:fe]
         rings = (ve - vs) // self.columns
         girth, length = self.uv_lengths[s]
         uv_lengths = np.broadcast_to([girth, length], (ve - vs, 2))
@@ -219,7 +219,8 @@ class _Grid:
         for grid in (positions, normals) if tangents is None else (positions, normals, tangents):
             grid[loop_last] = grid[loop_first]
 
-        faces, face_surface = _faces(signs, layout, columns)
+        faces = _faces(signs, layout, columns)
+        face_counts = 2 * around * np.maximum(layout.count - 1, 0)
         self.positions, self.normals = positions.reshape(-1, 3), normals.reshape(-1, 3)
         # Next to a fold or a pinch point the vertex normals of one triangle may differ widely,
         # and between rings turned far apart the chord need not follow d/dt: such triangles are
@@ -230,12 +231,17 @@ class _Grid:
         if np.any(strip):
             faces = orient_by_geometry(faces, self.positions, self.normals, np.repeat(strip, 2 * around))
         if near_zero[0].size:
-            faces, face_surface = drop_zero_area(self.positions, faces, near_zero[0] * columns + near_zero[1],
-                                                 face_surface)
+            count = len(faces)
+            faces, kept_faces = drop_zero_area(self.positions, faces, near_zero[0] * columns + near_zero[1],
+                                               np.arange(count))
+            if len(kept_faces) < count:
+                gone = np.setdiff1d(np.arange(count), kept_faces)
+                face_counts = face_counts - np.bincount(
+                    np.searchsorted(np.cumsum(face_counts), gone, side="right"), minlength=len(face_counts))
         self.faces = faces
         self.tangents = None if tangents is None else tangents.reshape(-1, 4)
         self.vertex_first = np.concatenate([layout.first, [len(rings)]]) * columns
-        self.face_first = np.concatenate([[0], np.cumsum(np.bincount(face_surface, minlength=len(layout.count)))])
+        self.face_first = np.concatenate([[0], np.cumsum(face_counts)])
         v_coordinate, self.uv_lengths = _along(field.samples, rings.radius, layout)
         uvs = np.empty(positions.shape[:2] + (2,))
         uvs[..., 0] = np.linspace(0.0, 1.0, columns)[None, :]
@@ -266,9 +272,9 @@ def _apply_signs(normals: np.ndarray, signs: RingSigns) -> None:
             normals[signs.examined] *= signs.at(signs.examined, normals.shape[1])[..., None]
 
 
-def _faces(signs: RingSigns, layout: SurfaceRows, columns: int) -> tuple[np.ndarray, np.ndarray]:
-    """Triangles (2 (K - S)(columns - 1), 3) int32 of every surface's (rings, columns) vertex grid
-    and the surface of each.
+def _faces(signs: RingSigns, layout: SurfaceRows, columns: int) -> np.ndarray:
+    """Triangles (2 (K - S)(columns - 1), 3) int32 of every surface's (rings, columns) vertex grid,
+    surface after surface, 2 (columns - 1) for each pair of consecutive rings.
 
     Quad (k, j) splits into (k,j)(k,j+1)(k+1,j) and (k,j+1)(k+1,j+1)(k+1,j), both wound like
     d/dtheta x d/dt; where the normal field is flipped (the sum of a triangle's three vertex
@@ -280,29 +286,32 @@ def _faces(signs: RingSigns, layout: SurfaceRows, columns: int) -> tuple[np.ndar
     row = np.empty((columns - 1, 2, 3), dtype=np.int32)
     row[:, 0, 0], row[:, 0, 1], row[:, 0, 2] = j, j + 1, j + columns
     row[:, 1, 0], row[:, 1, 1], row[:, 1, 2] = j + 1, j + columns + 1, j + columns
-    here, there = signs.ring[pair], signs.ring[pair + 1]
-    # with one sign per ring: (2 s_k + s_k+1) < 0 for the first triangle, (s_k + 2 s_k+1) < 0 for the second
-    flipped = np.stack([np.broadcast_to((here < 0.0)[:, None], (len(pair), columns - 1)),
-                        np.broadcast_to((there < 0.0)[:, None], (len(pair), columns - 1))], axis=2)
     examined = np.zeros(len(signs.ring), dtype=bool)
     examined[signs.examined] = True
     by_vertex = np.flatnonzero(examined[pair] | examined[pair + 1])
-    if by_vertex.size:
-        flipped = flipped.copy()
-        a, b = signs.at(pair[by_vertex], columns), signs.at(pair[by_vertex] + 1, columns)
-        flipped[by_vertex, :, 0] = a[:, :-1] + a[:, 1:] + b[:, :-1] < 0.0
-        flipped[by_vertex, :, 1] = a[:, 1:] + b[:, 1:] + b[:, :-1] < 0.0
     uniform = not by_vertex.size and (np.all(signs.ring > 0.0) or np.all(signs.ring < 0.0))
-    majority = bool(signs.ring[0] < 0.0) if uniform else bool(2 * np.count_nonzero(flipped) > flipped.size)
+    flipped = None
+    if uniform:  # one sign everywhere (the usual case): nothing to vote on
+        majority = bool(signs.ring[0] < 0.0)
+    else:
+        # with one sign per ring: (2 s_k + s_k+1) < 0 for the first triangle, (s_k + 2 s_k+1) < 0 for the second
+        flipped = np.empty((len(pair), columns - 1, 2), dtype=bool)
+        flipped[:, :, 0] = (signs.ring[pair] < 0.0)[:, None]
+        flipped[:, :, 1] = (signs.ring[pair + 1] < 0.0)[:, None]
+        if by_vertex.size:
+            a, b = signs.at(pair[by_vertex], columns), signs.at(pair[by_vertex] + 1, columns)
+            flipped[by_vertex, :, 0] = a[:, :-1] + a[:, 1:] + b[:, :-1] < 0.0
+            flipped[by_vertex, :, 1] = a[:, 1:] + b[:, 1:] + b[:, :-1] < 0.0
+        majority = bool(2 * np.count_nonzero(flipped) > flipped.size)
     base = row[:, :, [0, 2, 1]] if majority else row
     faces = np.empty((len(pair), (columns - 1) * 6), dtype=np.int32)
     np.add(base.reshape(1, -1), (pair * columns).astype(np.int32)[:, None], out=faces)
     faces = faces.reshape(len(pair), columns - 1, 2, 3)
-    if not uniform:  # one sign everywhere (the usual case): nothing to reorder
+    if flipped is not None:
         minority = ~flipped if majority else flipped
         if np.any(minority):
             faces[minority] = faces[minority][:, [0, 2, 1]]
-    return faces.reshape(-1, 3), np.repeat(layout.surface[pair], 2 * (columns - 1))
+    return faces.reshape(-1, 3)
 
 
 def grid_faces(rings: int, columns: int, signs: np.ndarray) -> np.ndarray:
@@ -311,7 +320,7 @@ def grid_faces(rings: int, columns: int, signs: np.ndarray) -> np.ndarray:
     ring = np.asarray(signs, dtype=np.float64).reshape(rings)
     one = RingSigns(ring, np.ones((0, columns)), np.empty(0, np.intp), np.zeros(1, dtype=bool), np.ones(rings - 1),
                     np.zeros(1, dtype=bool))
-    return _faces(one, SurfaceRows.of_counts([rings]), columns)[0]
+    return _faces(one, SurfaceRows.of_counts([rings]), columns)
 
 
 def _along(samples: np.ndarray, radius: np.ndarray, layout: SurfaceRows) -> tuple[np.ndarray, np.ndarray]:
