@@ -11,8 +11,8 @@ D: found here by doubling and bisection, not by the mesher. Printed per file: th
 meshes' and the uniform grids' vertices and meshing times summed over the chains, their ratios,
 the spread of the per-chain vertex ratios, and the largest measured deviation of a tolerance mesh
 against D. Times are the least of two runs per chain on the process's CPU clock with one BLAS
-thread, both meshes made the way a user gets them: ``pipeline.mesh_surface`` from the chain's
-surface spec, with its tolerance and with ``Resolution(around, along)`` (checked to be the
+thread, both meshes made the way a user gets them: ``pipeline.mesh_surface`` of the chain's
+tube, with its tolerance and with ``Resolution(around, along)`` (checked to be the
 measured uniform grid bit for bit); so both include building the surface and the pipeline's
 checks. By default the first 5 chains of each file (a few minutes); ``--whole`` measures every
 chain (hours for the neuron's 1,289 chains on a 2-core machine: the search for each chain's
@@ -46,7 +46,7 @@ from cgamesh.pipelines.chains import split_chains  # noqa: E402
 from cgamesh.errors import CgameshError  # noqa: E402
 from cgamesh.inputs.centerlines import read_centerlines  # noqa: E402
 from cgamesh.meshing.tolerance.tolerance_plan import plan_tolerance  # noqa: E402
-from cgamesh.pipelines.scene import Resolution, build_surface  # noqa: E402
+from cgamesh.pipelines.scene import Resolution  # noqa: E402
 from cgamesh.pipelines.scene import mesh_surface as real_mesh_surface  # noqa: E402
 
 
@@ -57,14 +57,14 @@ def least_time(work, repeats: int = 2):
 
 
 def tube_specs(path: Path, options: TubeOptions) -> list:
-    """The surface of every chain, as a tolerance run plans it (caught on its way to the planner)."""
+    """(request, surface) of every chain, as a tolerance run plans it (caught on its way to the planner)."""
     caught = []
     real = pipeline.plan_surface  # the tolerance run imports it when it plans a chain
 
-    def catching(spec, resolution=Resolution(), *args, **kwargs):
-        caught.append(spec)  # planned and meshed here coarsely: only the specs are wanted
-        coarse = replace(spec, tolerance=None, around=3, along=2 * len(spec.controls))
-        return real(coarse, resolution, *args, **kwargs)
+    def catching(spec, resolution=Resolution(), *args, surface=None, **kwargs):
+        caught.append((spec, surface))  # planned and meshed here coarsely: only the tubes are wanted
+        coarse = replace(spec, tolerance=None, around=3, along=2 * (surface.segment_count + 1))
+        return real(coarse, resolution, *args, surface=surface, **kwargs)
 
     pipeline.plan_surface = catching
     try:
@@ -81,10 +81,9 @@ def compare(name: str, path: Path, radius: float | None, relative: float, chains
     specs = tube_specs(path, TubeOptions(radius=radius, tolerance=tolerance, around=8))[:chains]
     totals = dict(vertices=0, seconds=0.0, uniform_vertices=0, uniform_seconds=0.0)
     ratios, worst, skipped = [], 0.0, 0
-    for spec in specs:
-        surface = build_surface(spec)
+    for spec, surface in specs:
         try:
-            mesh, seconds = least_time(lambda: real_mesh_surface(spec, Resolution()))
+            mesh, seconds = least_time(lambda: real_mesh_surface(spec, Resolution(), surface=surface))
         except CgameshError:
             skipped += 1
             continue
@@ -92,7 +91,7 @@ def compare(name: str, path: Path, radius: float | None, relative: float, chains
         worst = max(worst, tolerance_mesh_deviation(surface, spec, tolerance, mesh) / tolerance)
         rings, _ = smallest_uniform(surface, spec, plan.around, tolerance, max(2, plan.rings // 2))
         resolution = Resolution(around=plan.around, along=rings)
-        uniform, uniform_seconds = least_time(lambda: real_mesh_surface(spec, resolution))
+        uniform, uniform_seconds = least_time(lambda: real_mesh_surface(spec, resolution, surface=surface))
         reference = uniform_grid(surface, spec, plan.around, rings)[0]
         assert np.array_equal(uniform.positions, reference.positions), (name, "not the measured grid")
         totals["vertices"] += mesh.vertex_count
@@ -142,13 +141,12 @@ def compare_files(name: str, path: Path, radius: float | None, relative: float, 
     print(f"{name}: whole file, tolerance {tolerance:.3g} ({relative:g} of the median radius): "
           f"{vertices:,} vertices in {seconds:.1f} s CPU", flush=True)
 
-    specs = tube_specs(path, tolerance_options)
-    surfaces = [build_surface(spec) for spec in specs]
+    specs, surfaces = zip(*tube_specs(path, tolerance_options))
     chains, junctions = split_chains(lines)
     soma = lines.kinds == SOMA if lines.kinds is not None else np.zeros(len(lines.points), dtype=bool)
     sphere_radii = np.concatenate([radii[junctions[~soma[junctions]]], radii[soma]])
     floor = int(spheres_around(sphere_radii, tolerance).max()) if len(sphere_radii) else 3
-    widest = max(max(c.radius for c in spec.controls) for spec in specs)
+    widest = max(float(surface.circles(np.arange(surface.segment_count + 1.0)).radius.max()) for surface in surfaces)
     sag = int(np.ceil(np.pi / (2.0 * np.arcsin(np.sqrt(0.5 * tolerance / widest)))))  # r (1 - cos(pi / M)) <= D
     candidates = sorted({max(floor, int(np.ceil(f * sag))) for f in (1.25, 1.5, 2.0)})[:1 if one_around else None]
 

@@ -27,7 +27,7 @@ from cgamesh.pipelines.tubes import TubeSpec, finish_tube, tube_spec
 
 @dataclass
 class PlannedTube:
-    """A chain planned under a tolerance: its tube's spec and the plan priced (SurfacePlan)."""
+    """A chain planned under a tolerance: its tube and the plan priced (SurfacePlan)."""
 
     chain: Chain
     index: int
@@ -48,7 +48,7 @@ def plan_tubes(chains, points, radii, soma, tangents, segment_of, lines, options
         try:
             tube = tube_spec(chain, index, points, radii, soma, tangents, segment_of, lines, options, stem)
             if tube is not None:
-                planned.append(PlannedTube(chain, index, tube, plan_surface(tube.spec, Resolution())))
+                planned.append(PlannedTube(chain, index, tube, plan_surface(tube.request, Resolution(), surface=tube.surface)))
         except CgameshError as error:
             if options.strict:
                 raise

@@ -238,7 +238,8 @@ def _tube(chain: Chain, index: int, points, radii, soma, scalar, tangents, segme
     tube = tube_spec(chain, index, points, radii, soma, tangents, segment_of, lines, options, stem)
     if tube is None:
         return None
-    return finish_tube(tube, mesh_surface(tube.spec, Resolution()), chain, index, scalar, options, stem)
+    return finish_tube(tube, mesh_surface(tube.request, Resolution(), surface=tube.surface), chain, index, scalar,
+                       options, stem)
 
 
 def _assemble(pieces: list[SurfaceMesh], options: TubeOptions, stem: str) -> list[SurfaceMesh]:

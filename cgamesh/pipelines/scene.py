@@ -44,7 +44,7 @@ class Resolution:
 
 
 def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tangents: bool = False,
-                 max_memory=None) -> SurfaceMesh:
+                 max_memory=None, surface=None) -> SurfaceMesh:
     """The mesh of one surface, in the scene file's frame and units.
 
     A tolerance (from the command line, or the file's unless the command line gives a full
@@ -53,8 +53,10 @@ def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
     mesher's analytic tangents are wanted (an output writes TANGENT). ``max_memory``: the budget
     (bytes, a size such as "2G", a cgamesh.budget.Budget, or None for the default); a surface
     that needs more is refused with ResourceLimitError before anything is allocated.
+    ``spec``: a scene file's surface, or any request with its fields (a centreline chain's
+    tube); ``surface``: its evolved surface already built (else built from the spec).
     """
-    plan = plan_surface(spec, resolution, tangents)
+    plan = plan_surface(spec, resolution, tangents, surface=surface)
     costs.Budget.of(max_memory).require(plan.peak, plan.where, plan.what, _fitting(plan.tolerance, plan.peak))
     return mesh_planned(plan, tangents)
 
@@ -88,9 +90,10 @@ class SurfacePlan:
 
 
 def plan_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tangents: bool = False,
-                 build: bool = True) -> SurfacePlan:
+                 build: bool = True, surface=None) -> SurfacePlan:
     """Check and price one surface's request (see the module doc); builds its evolved surface
-    (a fixed resolution's only when ``build``: the batched pass builds its own)."""
+    unless given as ``surface`` (a fixed resolution's only when ``build``: the batched pass
+    builds its own)."""
     tolerance = _tolerance(spec, resolution)
     overridden = resolution.around is not None or resolution.along is not None
     if tolerance is None:
@@ -105,10 +108,13 @@ def plan_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tange
         held, peak = costs.surface_bytes(spec.type, around, along, spec.caps, tangents)
         where = (f"{spec.location} with --around {around} --along {along}" if overridden
                  else f"{spec.location}.resolution")
-        return SurfacePlan(spec, build_surface(spec) if build else None, around, along, None,
+        if surface is None and build:
+            surface = build_surface(spec)
+        return SurfacePlan(spec, surface, around, along, None,
                            costs.grid_vertices(spec.type, around, along, spec.caps), held, peak,
                            where, f"mesh ({around} x {along})")
-    surface = build_surface(spec)
+    if surface is None:
+        surface = build_surface(spec)
     where = (f"{spec.location} with --tolerance {tolerance:g}" if resolution.tolerance is not None
              else f"{spec.location}.tolerance")
     floor = tolerance_floor(surface)

@@ -1,8 +1,10 @@
-"""One chain's tube: its surface spec (a circle control per node) and its mesh's attributes.
+"""One chain's tube: its motor surface and request, and its mesh's attributes.
 
 ``tube_spec`` makes the circle surface of a chain (centre = the node, normal = the path's
-bisector turned to stay in the radius envelope, radius = the node's; a Catmull-Rom curve through
-them, ``interpolation = "motor"``), which the scene pipeline meshes like a scene file's surface;
+bisector turned to stay in the radius envelope, radius = the node's; the splined motion of a
+Catmull-Rom curve through them, as a scene file's ``interpolation: motor`` surface of those
+circles is built) straight from the chain's arrays, and what meshing it asks for (a
+``TubeRequest``), which the scene pipeline plans and meshes like a scene file's surface;
 ``finish_tube`` checks the mesh and gives it the chain's per-vertex ``radius``, ``segment`` and
 ``scalar`` and its direction colours, or, watertight and folding over itself, replaces it by
 frusta and node spheres (cgamesh.meshing.frusta).
@@ -16,8 +18,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from cgamesh.errors import DegenerateGeometryError
+from cgamesh.geometry.frame import LocalFrame
+from cgamesh.geometry.motor_surface import MotorSurface
+from cgamesh.geometry.motors import MotionSpline
 from cgamesh.inputs.centerlines import Centerlines
-from cgamesh.material import Material
+from cgamesh.inputs.scene import Location
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.node_normals import envelope_normals
 from cgamesh.pipelines.chains import Chain
@@ -26,10 +31,27 @@ from cgamesh.pipelines.tube_options import TubeOptions
 
 
 @dataclass(frozen=True)
-class TubeSpec:
-    """One chain's tube as a surface spec, with the nodes and ring normals its attributes need."""
+class TubeRequest:
+    """What meshing a chain's tube asks for, as the scene pipeline reads a surface spec's: its
+    name, kind, resolution (or tolerance), caps, and its place for messages (``location``)."""
 
-    spec: object  # cgamesh.inputs.scene.SurfaceSpec
+    name: str
+    location: Location
+    around: int | None
+    along: int | None
+    tolerance: float | None
+    caps: bool
+    type: str = "circles"
+    closed: bool = False
+
+
+@dataclass(frozen=True)
+class TubeSpec:
+    """One chain's tube: its motor surface and request, with the nodes and ring normals its
+    attributes need."""
+
+    request: TubeRequest
+    surface: MotorSurface
     nodes: np.ndarray
     p: np.ndarray
     tube_radii: np.ndarray
@@ -38,10 +60,8 @@ class TubeSpec:
 
 def tube_spec(chain: Chain, index: int, points, radii, soma, tangents, segment_of, lines: Centerlines,
               options: TubeOptions, stem: str) -> TubeSpec | None:
-    """The surface spec of one chain's tube (its junction tangents and segments noted in
-    ``tangents`` and ``segment_of``); None for a chain inside the soma alone."""
-    from cgamesh.inputs.scene import CircleControl, Location, SurfaceSpec
-
+    """One chain's tube (its junction tangents and segments noted in ``tangents`` and
+    ``segment_of``); None for a chain inside the soma alone."""
     nodes = chain.nodes
     tube_radii = radii[nodes]
     inside = soma[nodes]
@@ -63,26 +83,32 @@ def tube_spec(chain: Chain, index: int, points, radii, soma, tangents, segment_o
     tangents[nodes[0]] = np.where(segment_of[nodes[0]] == SOMA_SEGMENT, t[0], tangents[nodes[0]])
     segment_of[nodes[-1]] = index
     segment_of[nodes[0]] = np.where(segment_of[nodes[0]] == SOMA_SEGMENT, index, segment_of[nodes[0]])
-    controls = tuple(
-        CircleControl(center=tuple(c), normal=tuple(n), radius=float(r), through=None, weight=1.0,
-                      location=Location(lines.source, None if lines.lines is None else int(lines.lines[k]),
-                                        f"{chain.label}: {lines.node_name(int(k))}"))
-        for c, n, r, k in zip(p.tolist(), t.tolist(), tube_radii, nodes))
     along = (len(nodes) - 1) * (options.subdivide + 1) + 1
     fixed = options.tolerance is None
-    spec = SurfaceSpec(
-        name=f"{stem}_{index}", type="circles", curve="catmull_rom", tension=0.0, bias=0.0, continuity=0.0,
-        closed=False, align=True, controls=controls, around=options.around if fixed else None,
-        along=along if fixed else None, tolerance=options.tolerance, caps=options.watertight or options.caps,
-        material=Material(), location=where, interpolation="motor")
-    return TubeSpec(spec, nodes, p, tube_radii, t)
+    request = TubeRequest(f"{stem}_{index}", where, options.around if fixed else None, along if fixed else None,
+                          options.tolerance, options.watertight or options.caps)
+    return TubeSpec(request, tube_surface(request.name, p, t, tube_radii), nodes, p, tube_radii, t)
+
+
+def tube_surface(name: str, centre: np.ndarray, normal: np.ndarray, radius: np.ndarray) -> MotorSurface:
+    """The motor surface through the circles of centres (n, 3), normals (n, 3, any length) and radii
+    (n,) in file units: the splined similarity motion of a Catmull-Rom curve (aligned, open) in
+    the circles' working frame, as ``construction.build_motor_surface`` builds a scene file's
+    motor surface of those circle controls."""
+    frame = LocalFrame.enclosing(centre, radius)
+    # each normal over its own length as np.linalg.norm of a 3-vector takes it (a dot product):
+    # a matmul of 1 x 3 rows rounds as that does, a row-wise norm does not
+    unit = normal / np.sqrt(np.matmul(normal[:, None, :], normal[:, :, None])[:, 0])
+    path = MotionSpline.through(frame.to_local(centre), unit, radius / frame.scale, "catmull_rom", False, 0.0, 0.0,
+                                0.0, None, True)
+    return MotorSurface(name, path, frame)
 
 
 def finish_tube(tube: TubeSpec, mesh: SurfaceMesh, chain: Chain, index: int, scalar, options: TubeOptions,
                 stem: str) -> SurfaceMesh | list[SurfaceMesh]:
     """The chain's mesh checked and given its attributes and colours (or, watertight and
     folding, its frusta)."""
-    nodes, p, tube_radii, t, where = tube.nodes, tube.p, tube.tube_radii, tube.t, tube.spec.location
+    nodes, p, tube_radii, t, where = tube.nodes, tube.p, tube.tube_radii, tube.t, tube.request.location
     if not (np.isfinite(mesh.positions).all() and np.isfinite(mesh.normals).all()):
         raise DegenerateGeometryError(f"{where}: expected a finite mesh, got non-finite vertices or normals")
     if options.watertight and not (closed_and_oriented(mesh) and rings_in_order(mesh)):
