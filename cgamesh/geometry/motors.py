@@ -249,16 +249,26 @@ class MotionSpline:
         """Raise where the normal spline comes near zero (the plane's direction is lost there)."""
         t = np.linspace(0.0, self.segment_count, samples_per_segment * self.segment_count + 1)
         value, _ = self._values(t)
-        length = np.linalg.norm(value[:, 3:6], axis=1)
-        bad = ~(length >= MIN_NORMAL_LENGTH) | ~np.all(np.isfinite(value), axis=1)
-        if np.any(bad):
-            worst = int(np.argmin(np.where(np.isfinite(length), length, -np.inf)))
-            segment = min(int(t[worst]), self.segment_count - 1)
-            raise DegenerateGeometryError(
-                f"surface '{name}': the motor interpolation loses the circle's plane at segment {segment}, "
-                f"alpha = {t[worst] - segment:.6g} (the control normals cancel there; turn fewer degrees "
-                "between neighbouring controls, or add a control)"
-            )
+        error = lost_plane(name, t, np.linalg.norm(value[:, 3:6], axis=1), np.all(np.isfinite(value), axis=1),
+                           self.segment_count)
+        if error is not None:
+            raise error
+
+
+def lost_plane(name: str, t: np.ndarray, length: np.ndarray, finite: np.ndarray,
+               segment_count: int) -> DegenerateGeometryError | None:
+    """The error of a motor surface whose normal spline, of lengths (A,) at parameters t (A,)
+    (``finite``: whether the spline's values there are), comes near zero; None where it does not."""
+    bad = ~(length >= MIN_NORMAL_LENGTH) | ~finite
+    if not np.any(bad):
+        return None
+    worst = int(np.argmin(np.where(np.isfinite(length), length, -np.inf)))
+    segment = min(int(t[worst]), segment_count - 1)
+    return DegenerateGeometryError(
+        f"surface '{name}': the motor interpolation loses the circle's plane at segment {segment}, "
+        f"alpha = {t[worst] - segment:.6g} (the control normals cancel there; turn fewer degrees "
+        "between neighbouring controls, or add a control)"
+    )
 
 
 # The normal spline H(t) must stay at least this long (its nodes are unit vectors).

@@ -117,11 +117,8 @@ def mesh_centerlines(lines: Centerlines, options: TubeOptions = TubeOptions(),
     if uses_batched_pass(options):
         from cgamesh.meshing.batch_pass.chains import tube_pieces
 
-        def single(chain, index, tangents_, segment_of_):
-            return _tube(chain, index, points, radii, soma, scalar, tangents_, segment_of_, lines, options, stem)
-
         skipped = tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, options, stem,
-                              label_name, single, progress, sink)
+                              label_name, progress, sink)
         chains_loop = []
     elif planned is not None:
         to_tolerance.mesh_planned_tubes(planned, scalar, options, stem, skipped, progress, sink)

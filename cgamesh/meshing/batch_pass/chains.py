@@ -1,15 +1,13 @@
-"""Centreline chains through the batched pass: the per-chain pipeline's tubes, for all chains at once.
+"""Centreline chains at a fixed resolution: every chain's tube, all chains at once.
 
-``tube_pieces`` does for every chain what ``centerline_pipeline._tube`` does for one (soma
-radii, exact duplicates merged, node tangents and ring normals, the chain's local frame, the motion, the mesh,
-its attributes and direction colours, the junction bookkeeping), as arrays over every chain.
-A chain with nodes inside the soma is batched too, with the per-chain path's radii
-(``_outside_radii``). Chains the batched pass does not take (all nodes inside the soma, fewer
-than two distinct points, or a surface needing a per-chain repair, see ``rings``) go through
-the per-chain ``single`` function, which also reports the errors of the chains that cannot be
-meshed.
-Chains are meshed in chunks of about CHUNK_RINGS rings, so scratch memory stays bounded and
-progress is reported per chunk.
+``tube_pieces`` does for every chain what ``pipelines.tubes`` does for one (soma radii, exact
+duplicates merged, node tangents and ring normals, the chain's local frame, the motion, the
+mesh, its attributes and direction colours, the junction bookkeeping), as arrays over every
+chain. A chain with nodes inside the soma takes its nodes' radii outside it
+(``_outside_radii``); one entirely inside has no tube (the soma's spheres stand for it); one of
+fewer than two distinct points, or whose tube cannot be meshed (``rings``), is skipped with its
+error. Chains are meshed in chunks of about CHUNK_RINGS rings, so scratch memory stays bounded
+and progress is reported per chunk.
 """
 
 from __future__ import annotations
@@ -19,7 +17,7 @@ from collections.abc import Callable
 import numpy as np
 
 from cgamesh.budget import BATCHED_CHUNK_RINGS
-from cgamesh.errors import CgameshError
+from cgamesh.errors import DegenerateGeometryError
 from cgamesh.meshing.batch_pass.motions import ChainMotions, ChainNodes
 from cgamesh.meshing.batch_pass.rings import TubeArrays, mesh_chains
 from cgamesh.meshing.circles import grid_weld
@@ -88,13 +86,13 @@ def _interp(values: np.ndarray, first: np.ndarray, count: np.ndarray, chain: np.
 
 
 def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, options, stem: str, label_name,
-                single: Callable, progress: Callable, sink: Callable[[SurfaceMesh], None]) -> list[str]:
+                progress: Callable, sink: Callable[[SurfaceMesh], None]) -> list[str]:
     """Hands the tube meshes of ``chains`` to ``sink`` in chain order (runs of batched chains as
     one mesh each, unless ``options.split``), chunk by chunk, so a caller that merges them holds
     one chunk's pieces at a time; returns the skipped chains' lines. Updates ``tangents`` and
     ``segment_of`` (the junction spheres' direction and segment) as the per-chain loop does.
     ``chains``: every chain's nodes as one flat array (``nodes``, ``offsets``, ``counts``);
-    ``chains[i]`` is chain i with its label, made only for messages, names and the per-chain path."""
+    ``chains[i]`` is chain i with its label, made only for messages and names."""
     counts = chains.counts
     total = len(chains)
     nodes = chains.nodes[chains.offsets[0]:chains.offsets[-1]]
@@ -120,47 +118,49 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
     m_t = (envelope_normals(m_p, m_r, _segment_tangents(m_p, m_first[meshable], m_count[meshable]),
                             m_first[meshable], m_count[meshable]) if len(m_p) else np.zeros((0, 3)))
 
-    fallback = np.zeros(total, dtype=bool)
     rings_of = (m_count - 1) * (options.subdivide + 1) + 1
-    # chunks of about CHUNK_RINGS rings of batched chains; a chain meshed alone joins the chunk
-    # it falls in by index, so pieces come out in chain order chunk after chunk
+    # chunks of about CHUNK_RINGS rings of meshable chains; a chain without a tube joins the
+    # chunk it falls in by index, so pieces come out in chain order chunk after chunk
     chunk_of = np.cumsum(np.where(meshable, rings_of, 0)) // CHUNK_RINGS
     bounds = np.flatnonzero(np.diff(chunk_of)) + 1
     skipped: list[tuple[int, str]] = []
     meshed = meshable.copy()
-    scratch_t, scratch_s = tangents.copy(), segment_of.copy()
     for chunk in np.split(np.arange(total), bounds) if total else []:
         members = chunk[meshable[chunk]]
+        errors = {int(index): DegenerateGeometryError(f"{_where(chains, index)}: expected at least two distinct "
+                                                      f"points, got {kept_counts[index]}")
+                  for index in chunk[~meshable[chunk] & ~soma_only[chunk]]}
         batched_meshes: dict[int, SurfaceMesh] = {}
         if len(members):
-            result = _mesh_chunk(members, m_first, m_count, m_p, m_t, m_r, options)
-            fallback[members[result.fallback]] = True
-            batched_meshes = _chain_meshes(members, result, m_first, m_count, m_r, m_t, scalar, m_nodes, chains,
-                                           options, stem, label_name)
+            result = _mesh_chunk(members, m_first, m_count, m_p, m_t, m_r, options, stem)
+            errors.update({int(members[k]): type(error)(f"{_where(chains, members[k])}: {error}")
+                           for k, error in result.errors.items()})
+            batched_meshes = _chain_meshes(members, result, m_first, m_count, m_p, m_r, m_t, scalar, m_nodes,
+                                           chains, options, stem, label_name)
             del result  # the chunk's scratch arrays, freed before the next chunk
             progress(chains[int(members[-1])].label, len(members))
-        # the per-chain path for the rest of the chunk, in order, with its own errors
-        pieces_by_chain: dict[int, SurfaceMesh | None] = {}
-        for index in chunk[~meshable[chunk] | fallback[chunk]]:
-            try:
-                pieces_by_chain[int(index)] = single(chains[index], int(index), scratch_t, scratch_s)
-            except CgameshError as error:
-                if options.strict:
-                    raise
-                skipped.append((int(index), str(error)))
-                meshed[index] = False
-                progress(chains[int(index)].label, 1)
-                continue
-            meshed[index] = pieces_by_chain[int(index)] is not None
-            if not meshable[index]:  # a batched chain handed back was counted with its chunk
-                progress(chains[int(index)].label, 1)
-        for piece in _ordered(batched_meshes, pieces_by_chain):
-            sink(piece)
+        for index in sorted(errors):
+            if options.strict:
+                raise errors[index]
+            skipped.append((index, str(errors[index])))
+            meshed[index] = False
+        for index in chunk[~meshable[chunk]]:  # chains without a tube, counted one by one
+            progress(chains[int(index)].label, 1)
+        for key in sorted(batched_meshes):
+            sink(batched_meshes[key])
     _junction_events(meshed, m_first, m_count, m_nodes, m_t, tangents, segment_of)
     return [line for _, line in sorted(skipped)]
 
 
-def _mesh_chunk(members, first, count, p, t, r, options) -> TubeArrays:
+def _where(chains, index) -> str:
+    """A chain's place in its file, as its messages name it."""
+    from cgamesh.inputs.scene import Location
+
+    chain = chains[int(index)]
+    return str(Location(chains.lines.source, chain.line, chain.label))
+
+
+def _mesh_chunk(members, first, count, p, t, r, options, stem: str) -> TubeArrays:
     """The batched meshes of the chains ``members`` (indices into the per-chain arrays)."""
     c = count[members]
     local_first = np.concatenate([[0], np.cumsum(c)[:-1]]).astype(np.int64)
@@ -179,7 +179,8 @@ def _mesh_chunk(members, first, count, p, t, r, options) -> TubeArrays:
     # of the 1 x 3 rows rounds as that does, the row-wise norm does not
     normal = tangent / np.sqrt(np.matmul(tangent[:, None, :], tangent[:, :, None])[:, 0])
     motions = ChainMotions.through(local_centre, normal, radius / scale[chain], ChainNodes(local_first, c))
-    return mesh_chains(motions, origin, scale, options.around, options.subdivide)
+    return mesh_chains(motions, origin, scale, options.around, options.subdivide,
+                       [f"{stem}_{int(index)}" for index in members])
 
 
 def _junction_events(meshed, first, count, nodes, t, tangents, segment_of) -> None:
@@ -199,20 +200,31 @@ def _junction_events(meshed, first, count, nodes, t, tangents, segment_of) -> No
     segment_of[nodes[ends]] = chains
 
 
-def _chain_meshes(members, result: TubeArrays, first, count, radii, t, scalar, nodes, chains, options, stem,
+def _chain_meshes(members, result: TubeArrays, first, count, p, radii, t, scalar, nodes, chains, options, stem,
                   label_name) -> dict[int, SurfaceMesh]:
     """Runs of consecutive chains (or, split, single chains) of one chunk as meshes, by first chain.
 
     A run's mesh carries no ``uv_lengths``: it goes into the merged mesh, which keeps none
     (cgamesh.meshing.merge); a single chain's are its two lengths broadcast over its vertices,
     as the per-chain mesher gives them."""
-    keep = np.flatnonzero(~result.fallback)
+    failed = np.zeros(len(members), dtype=bool)
+    failed[list(result.errors)] = True
+    keep = np.flatnonzero(~failed)
     if not len(keep):
         return {}
     columns = options.around + 1
     # every vertex of a ring has the ring's values: they are computed once per ring, then repeated
     ring_chain = members[result.ring_chain]
     ring_s = result.ring_local / (options.subdivide + 1)
+    for k in np.flatnonzero(result.dropped & ~failed):
+        # rings left out as coincident: each ring's place along the chain from its arc length (v)
+        # matched to the nodes' along the polyline
+        rings = np.flatnonzero(result.ring_chain == k)
+        c = members[k]
+        nodes_p = p[first[c]: first[c] + count[c]]
+        length = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(nodes_p, axis=0), axis=1))])
+        v = np.clip(result.uvs[rings * columns, 1], 0.0, 1.0)
+        ring_s[rings] = np.interp(v * length[-1], length, np.arange(count[c]))
     attributes = {"radius": np.repeat(_interp(radii, first, count, ring_chain, ring_s), columns),
                   "segment": np.repeat(ring_chain.astype(np.float64), columns)}
     if scalar is not None:
@@ -222,7 +234,7 @@ def _chain_meshes(members, result: TubeArrays, first, count, radii, t, scalar, n
         from cgamesh.meshing.colors import direction_colors
 
         global_chain = np.repeat(ring_chain, columns)
-        s = np.repeat(result.ring_local, columns) / (options.subdivide + 1)
+        s = np.repeat(ring_s, columns)
         along_t = np.stack([_interp(t[:, k], first, count, global_chain, s) for k in range(3)], axis=1)
         del global_chain, s
         colors = direction_colors(along_t)  # any length; a zero one (a turn back) gets NAN_COLOR
@@ -257,9 +269,3 @@ def _chain_meshes(members, result: TubeArrays, first, count, radii, t, scalar, n
             colors=None if colors is None else colors[vs:ve],
             attributes={key: value[vs:ve] for key, value in attributes.items()})
     return out
-
-
-def _ordered(batched: dict[int, SurfaceMesh], single: dict[int, SurfaceMesh | None]) -> list[SurfaceMesh]:
-    """Batched runs and per-chain meshes in chain order (a run is keyed by its first chain)."""
-    keys = sorted(set(batched) | {k for k, m in single.items() if m is not None})
-    return [batched[k] if k in batched else single[k] for k in keys]

@@ -4,10 +4,10 @@ one circle mesher (cgamesh.meshing.circles.mesh_rings).
 For every chain of ``ChainMotions`` the rings sit where a chain meshed alone puts them
 (``np.linspace(0, spans, along)``, reproduced with linspace's own arithmetic) and are read out
 of the same circle blades (``circle_rows``, blade-major) in the chain's local frame. A chain
-whose normal spline is not certified away from zero, or whose rings would coincide in an output
-file (its attributes then follow its arc length, not its rings), or that the mesher could not
-mesh, is marked ``fallback``: the caller meshes it alone, where its own reader names what is
-wrong.
+whose normal spline is not certified away from zero by its bound is scanned as a motor
+surface's ``check_projection_exists`` scans it; one that loses its plane there, or whose
+rings all coincide, gets its error. Rings that would coincide in an output file are left out
+(``dropped``: such a chain's attributes follow its arc length, not its rings).
 """
 
 from __future__ import annotations
@@ -16,6 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cgamesh.errors import CgameshError, DegenerateGeometryError
+from cgamesh.geometry.motors import lost_plane
+from cgamesh.geometry.surface import SCAN_SAMPLES_PER_SEGMENT
 from cgamesh.meshing.batch_pass.circle_rows import CircleRows
 from cgamesh.meshing.batch_pass.motions import ChainMotions
 from cgamesh.meshing.circles import CircleSurfaces, mesh_rings
@@ -30,8 +33,9 @@ class TubeArrays:
     rows of 2 around triangles, one row per pair of consecutive rings (fewer where a triangle
     of no area was dropped); ring_chain (R,), ring_local (R,) the chain of each kept ring and
     its index within its chain (a ring's around + 1 vertices are consecutive); face_counts (C,)
-    triangles per chain; uv_lengths (C, 2) per chain (circumference, length); fallback (C,)
-    chains left to be meshed alone.
+    triangles per chain; uv_lengths (C, 2) per chain (circumference, length); errors {chain:
+    error} of the chains that cannot be meshed (their vertices are not to be used); dropped
+    (C,) chains with rings left out as coincident.
     """
 
     positions: np.ndarray
@@ -42,7 +46,8 @@ class TubeArrays:
     ring_local: np.ndarray
     face_counts: np.ndarray
     uv_lengths: np.ndarray
-    fallback: np.ndarray
+    errors: dict
+    dropped: np.ndarray
 
 
 def _linspace_parameters(spans: np.ndarray, along: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -69,10 +74,32 @@ def _rows(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, chain: n
                     row_origin, row_scale, t)
 
 
+def _lost_planes(motions: ChainMotions, chains: np.ndarray, names) -> dict[int, CgameshError]:
+    """The errors of the chains (indices (n,)) whose normal spline comes near zero on the scan
+    of a motor surface's check (SCAN_SAMPLES_PER_SEGMENT samples per span)."""
+    spans = motions.nodes.count[chains] - 1
+    samples = SCAN_SAMPLES_PER_SEGMENT * spans + 1
+    t, which = _linspace_parameters(spans, samples)
+    chain = chains[which]
+    segment = np.clip(np.floor(t), 0, motions.nodes.count[chain] - 2).astype(np.int64)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        state = motions.evaluate(motions.nodes.span_first[chain] + segment, t - segment)
+    finite = (np.isfinite(state.centre).all(axis=1) & np.isfinite(state.radius)
+              & np.isfinite(state.normal_length))
+    errors = {}
+    first = np.concatenate([[0], np.cumsum(samples)])
+    for k, c in enumerate(chains):
+        rows = slice(first[k], first[k + 1])
+        error = lost_plane(names[c], t[rows], state.normal_length[rows], finite[rows], int(spans[k]))
+        if error is not None:
+            errors[int(c)] = error
+    return errors
+
+
 def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, around: int,
-                subdivide: int) -> TubeArrays:
+                subdivide: int, names) -> TubeArrays:
     """Tubes of ``around`` vertices per ring and ``subdivide`` rings between nodes for every chain
-    (frames: origin (C, 3), scale (C,))."""
+    (frames: origin (C, 3), scale (C,); ``names`` (C,) their surfaces' names, for messages)."""
     nodes = motions.nodes
     chains = len(nodes.count)
     segments = nodes.count - 1
@@ -83,14 +110,17 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
     def resample(chain: np.ndarray, at: np.ndarray) -> tuple[RingRows, np.ndarray]:
         return _rows(motions, origin, scale, chain, at), np.ones(len(at), dtype=bool)
 
-    surfaces = CircleSurfaces(("tube",) * chains, segments.astype(np.float64), np.zeros(chains, dtype=bool),
+    surfaces = CircleSurfaces(tuple(names), segments.astype(np.float64), np.zeros(chains, dtype=bool),
                               np.zeros(chains, dtype=bool), resample)
     meshes = mesh_rings(rings, SurfaceRows.of_counts(along), surfaces, around, distinct=True)
     del rings
-    kept = np.bincount(meshes.ring_surface, minlength=chains)
-    fallback = ~motions.certified | ~meshes.meshed | (kept != along)
+    errors = _lost_planes(motions, np.flatnonzero(~motions.certified), names)
+    for c in np.flatnonzero(~meshes.meshed):  # a motor circle is never a line: rings that all coincide
+        errors.setdefault(int(c), meshes.errors.get(int(c)) or DegenerateGeometryError(
+            f"surface '{names[c]}': the tube could not be meshed"))
+    dropped = np.bincount(meshes.ring_surface, minlength=chains) != along
     face_counts = np.diff(meshes.face_first)
     faces = meshes.faces
     faces -= np.repeat(meshes.vertex_first[:-1], face_counts).astype(np.int32)[:, None]
     return TubeArrays(meshes.positions, meshes.normals, meshes.uvs, faces, meshes.ring_surface, meshes.ring_local,
-                      face_counts, meshes.uv_lengths, fallback)
+                      face_counts, meshes.uv_lengths, errors, dropped)
