@@ -28,9 +28,8 @@ from cgamesh.inputs.centerlines import Centerlines
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.node_normals import envelope_normals
+from cgamesh.options import COLOR_MODES, UP_AXES  # the table the options come from
 
-UP_AXES = ("x", "y", "z")
-COLOR_MODES = ("none", "radius", "direction", "segment")  # or the name of a per-point scalar
 SOMA = 1  # SWC structure type
 SOMA_SEGMENT = -1.0  # the ``segment`` attribute of soma spheres
 # Sphere vertices meshed at a time when they are merged (182 spheres of 45 vertices at 8 around:
@@ -41,7 +40,9 @@ SPHERE_BLOCK_VERTICES = 1 << 13
 
 @dataclass(frozen=True)
 class TubeOptions:
-    """How centrelines become tubes (the command line's real-data options).
+    """How centrelines become tubes (the command line's real-data options), as the centreline
+    pipeline receives them; built from the table of options by ``cgamesh.options.tube_options``,
+    whose defaults are these.
 
     radius:     a constant radius for every node (required when the input has no radii; it
                 replaces the file's radii when given).

@@ -36,7 +36,8 @@ FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 @dataclass(frozen=True)
 class Resolution:
-    """Overrides of every surface's resolution or tolerance from the command line (None keeps the file's)."""
+    """Overrides of every surface's resolution or tolerance from the command line (None keeps the
+    file's); built from the table of options by ``cgamesh.options.resolution``."""
 
     around: int | None = None
     along: int | None = None
