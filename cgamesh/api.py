@@ -90,14 +90,20 @@ class Meshes:
         a field of the file, ``scalar`` (empty for scene files)."""
         return dict(self._joined.attributes or {})
 
-    def export(self, path: str | os.PathLike[str], *, tangents: bool = False, quantize: bool = False) -> int:
+    def export(self, path: str | os.PathLike[str], **options: bool) -> int:
         """Write every surface to ``path`` in the format of its extension (.glb, .gltf, .usda,
-        .usdc, .usd, .usdz, .obj, .ply, .stl), atomically; returns the bytes written."""
+        .usdc, .usd, .usdz, .obj, .ply, .stl), atomically; returns the bytes written.
+
+        ``options``: the writer options of the table in cgamesh.options (``write_keywords``):
+        ``tangents``, ``quantize`` (glTF; other formats have no use for them).
+        """
+        from cgamesh import options as table
         from cgamesh.export.options import GltfOptions, WriteOptions
         from cgamesh.export.registry import write
 
+        table.check_keywords(options, table.write_keywords())
         return write(path, list(self.surfaces), WriteOptions(self.up, self.meters_per_unit, self.units,
-                                                             GltfOptions(tangents=tangents, quantize=quantize)))
+                                                             GltfOptions.from_options(options)))
 
     def to_trimesh(self):
         """One ``trimesh.Trimesh`` of every surface (welded seams kept apart: UVs differ there),
@@ -134,10 +140,10 @@ def load(path: str | os.PathLike[str], **options: Any) -> Meshes:
     table.check_keywords(options, table.keywords(found.kind), found.kind)
     given = table.given(options)
     if found.kind is InputKind.SCENE:
-        from cgamesh.pipeline import mesh_scene
+        from cgamesh.pipeline import Resolution, mesh_scene
 
         scene = found.read(name)
-        surfaces = mesh_scene(scene, table.resolution(given), tangents=bool(given.get("tangents", False)))
+        surfaces = mesh_scene(scene, Resolution.from_options(given), tangents=bool(given.get("tangents", False)))
         return Meshes(tuple(surfaces), up=scene.up, units=scene.units, meters_per_unit=scene.meters_per_unit)
     from cgamesh.inputs.formats import read_centerlines
 
@@ -222,9 +228,8 @@ def _flat(values, pieces, name: str, key: str) -> np.ndarray:
 
 
 def _mesh(lines, options: dict) -> Meshes:
-    from cgamesh.centerline_pipeline import mesh_centerlines
-    from cgamesh.options import tube_options
+    from cgamesh.centerline_pipeline import TubeOptions, mesh_centerlines
 
-    built = mesh_centerlines(lines, tube_options(options))
+    built = mesh_centerlines(lines, TubeOptions.from_options(options))
     return Meshes(tuple((mesh, built.material) for mesh in built.meshes), up=built.up, units=built.units,
                   meters_per_unit=built.meters_per_unit, skipped=built.skipped)

@@ -25,10 +25,11 @@ import numpy as np
 
 from cgamesh.errors import CgameshError, DegenerateGeometryError, InvalidInputError
 from cgamesh.inputs.centerlines import Centerlines
+from cgamesh.inputs.formats import InputKind
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.node_normals import envelope_normals
-from cgamesh.options import COLOR_MODES, UP_AXES  # the table the options come from
+from cgamesh.options import COLOR_MODES, UP_AXES, for_input  # the table the options come from
 
 SOMA = 1  # SWC structure type
 SOMA_SEGMENT = -1.0  # the ``segment`` attribute of soma spheres
@@ -41,7 +42,7 @@ SPHERE_BLOCK_VERTICES = 1 << 13
 @dataclass(frozen=True)
 class TubeOptions:
     """How centrelines become tubes (the command line's real-data options), as the centreline
-    pipeline receives them; built from the table of options by ``cgamesh.options.tube_options``,
+    pipeline receives them; ``from_options`` builds one from the table of options (cgamesh.options),
     whose defaults are these.
 
     radius:     a constant radius for every node (required when the input has no radii; it
@@ -69,6 +70,13 @@ class TubeOptions:
     watertight: bool = False
     strict: bool = False
     caps: bool = False
+
+    @classmethod
+    def from_options(cls, values) -> TubeOptions:
+        """The options of ``values`` (a mapping by the table's names) that a centreline input
+        takes and were given; the defaults for the others. ``units`` is the reader's, not ours."""
+        return cls(**{name: value for name, value in for_input(values, InputKind.CENTERLINES).items()
+                      if name != "units"})
 
 
 @dataclass(frozen=True)

@@ -11,8 +11,10 @@ combinations refused. From these come:
   their checks (``check_keywords``);
 - the options of ``cgamesh batch`` and ``cgamesh.batch(...)`` (every name here), of which each
   input takes those of its kind;
-- the values handed on: ``Resolution`` for scenes, ``TubeOptions`` for centrelines and the glTF
-  part of the writers' ``WriteOptions`` (``resolution``, ``tube_options``, ``gltf_options``).
+- the values handed on, each built by its own class from the table (which imports neither the
+  pipelines nor the writers): ``Resolution.from_options`` for scenes,
+  ``TubeOptions.from_options`` for centrelines, ``GltfOptions.from_options`` for the glTF part of
+  the writers' ``WriteOptions``.
 
 An option is "given" when its value is not None (a switch: when it is True), so 0 is a value.
 
@@ -260,7 +262,12 @@ def for_input(values: Mapping, kind: InputKind) -> dict:
     return {name: value for name, value in given(values).items() if name in wanted}
 
 
-def check_keywords(values: Mapping, allowed: tuple[str, ...], kind: InputKind) -> None:
+def write_keywords() -> tuple[str, ...]:
+    """The options that fill a part of the writers' WriteOptions (``Meshes.export``'s keywords)."""
+    return tuple(option.name for option in OPTIONS if option.writes is not None)
+
+
+def check_keywords(values: Mapping, allowed: tuple[str, ...], kind: InputKind | None = None) -> None:
     """Refuse a keyword not in ``allowed`` (one line listing them), a value of the wrong type or
     range, and a combination EXCLUSIVE refuses for ``kind`` (named as keywords)."""
     unknown = sorted(set(values) - set(allowed))
@@ -269,7 +276,8 @@ def check_keywords(values: Mapping, allowed: tuple[str, ...], kind: InputKind) -
     for name, value in values.items():
         if value is not None:
             BY_NAME[name].value.check(name, value)
-    refuse_exclusive(values, {kind}, spell=str)
+    if kind is not None:
+        refuse_exclusive(values, {kind}, spell=str)
 
 
 def refuse_elsewhere(values: Mapping, kind: InputKind, source: str) -> None:
@@ -297,31 +305,15 @@ def check_batch(values: Mapping) -> None:
     if unknown:
         raise InvalidInputError(f"unknown meshing option{'s' if len(unknown) > 1 else ''} {', '.join(unknown)}; "
                                 f"expected some of {', '.join(sorted(BY_NAME))}")
-    for name, value in given(values).items():
-        BY_NAME[name].value.check(name, value)
+    for name, value in values.items():
+        if value is not None:
+            BY_NAME[name].value.check(name, value)
     refuse_exclusive(values, BOTH)
 
 
-def resolution(values: Mapping):
-    """The scene pipeline's Resolution from the given options (None keeps the file's)."""
-    from cgamesh.pipeline import Resolution
-
-    return Resolution(values.get("around"), values.get("along"), values.get("tolerance"))
-
-
-def tube_options(values: Mapping):
-    """The centreline pipeline's TubeOptions from the given options (TubeOptions' defaults else)."""
-    from cgamesh.centerline_pipeline import TubeOptions
-
-    return TubeOptions(**{name: value for name, value in for_input(values, CENTERLINES).items() if name != "units"})
-
-
-def gltf_options(values: Mapping):
-    """The glTF part of WriteOptions from the given options (its defaults else)."""
-    from cgamesh.export.options import GltfOptions
-
-    return GltfOptions(**{name: bool(value) for name, value in values.items()
-                          if name in BY_NAME and BY_NAME[name].writes == "gltf"})
+def for_writer(values: Mapping, part: str) -> dict:
+    """The given options of ``values`` that fill the writers' part ``part`` ("gltf")."""
+    return {name: value for name, value in given(values).items() if name in BY_NAME and BY_NAME[name].writes == part}
 
 
 def _given(name: str, value) -> bool:

@@ -51,9 +51,9 @@ def run(args: argparse.Namespace) -> str:
     if found is not None and found.kind is InputKind.CENTERLINES:  # before the scene mesher's imports
         return realdata.run(args)
     from cgamesh.export.atomic import all_or_nothing
-    from cgamesh.export.options import WriteOptions
+    from cgamesh.export.options import GltfOptions, WriteOptions
     from cgamesh.export.registry import check_distinct, vertices_written, write
-    from cgamesh.pipeline import mesh_scene
+    from cgamesh.pipeline import Resolution, mesh_scene
     from cgamesh.progress import Progress
 
     values = option_values(args)
@@ -73,9 +73,9 @@ def run(args: argparse.Namespace) -> str:
     # a file of no known format is read as a scene: its reader's message then says what is wrong
     scene = (found or table_scene_format()).read(args.scene, rendering=False)  # rendering keys: render's
     with Progress(len(scene.surfaces), enabled=not args.quiet) as progress:
-        meshes = mesh_scene(scene, table.resolution(values), progress=progress.advance,
+        meshes = mesh_scene(scene, Resolution.from_options(values), progress=progress.advance,
                             tangents=args.tangents, max_memory=args.max_memory, outputs=args.output)
-    write_options = WriteOptions(scene.up, scene.meters_per_unit, scene.units, table.gltf_options(values))
+    write_options = WriteOptions(scene.up, scene.meters_per_unit, scene.units, GltfOptions.from_options(values))
     with all_or_nothing():  # every output, sidecar and the report, or none of them
         written = [write(output, meshes, write_options) for output in outputs]
         failures = write_report(args.report, [mesh for mesh, _ in meshes], args.scene) if args.report else []

@@ -35,12 +35,14 @@ def run(args: argparse.Namespace):
     """Print the table (or JSON); returns 1 under --strict when a threshold is broken."""
     from cgamesh.quality import Thresholds, load_meshes, report
 
-    path = Path(args.file)
-    if path.suffix.lower() in (".yaml", ".yml"):
-        from cgamesh.pipeline import Resolution, mesh_scene
-        from cgamesh.inputs.scene import load_scene
+    from cgamesh.inputs.formats import InputKind, find
 
-        scene = load_scene(path, rendering=False)  # the rendering keys are render's and verify's
+    path = Path(args.file)
+    found = find(path)
+    if found is not None and found.kind is InputKind.SCENE:
+        from cgamesh.pipeline import Resolution, mesh_scene
+
+        scene = found.read(path, rendering=False)  # the rendering keys are render's and verify's
         meshes = [mesh for mesh, _ in mesh_scene(scene, Resolution(args.around, args.along), max_memory=args.max_memory)]
     else:
         from cgamesh.readers.files import read_limit

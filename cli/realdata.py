@@ -26,8 +26,8 @@ def run(args: argparse.Namespace) -> str | int:
     import numpy as np
 
     from cgamesh import options as table
-    from cgamesh.centerline_pipeline import chain_count, mesh_centerlines, uses_batched_pass
-    from cgamesh.export.options import WriteOptions
+    from cgamesh.centerline_pipeline import TubeOptions, chain_count, mesh_centerlines, uses_batched_pass
+    from cgamesh.export.options import GltfOptions, WriteOptions
     from cgamesh.export.registry import write, writer_for
     from cgamesh.inputs.formats import InputKind, read_centerlines
     from cgamesh.progress import Progress
@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> str | int:
     check_distinct(outputs, args.report, args.scene)
     start = time.perf_counter()
     lines = read_centerlines(args.scene, units=args.units)
-    options = table.tube_options(values)
+    options = TubeOptions.from_options(values)
     chains = chain_count(lines)
     if options.tolerance is None:  # the tolerance's own plan prices a tolerance run
         longest = int(np.diff(lines.offsets).max()) if lines.offsets is not None and len(lines.offsets) > 1 else None
@@ -67,7 +67,7 @@ def run(args: argparse.Namespace) -> str | int:
     surfaces = [(mesh, built.material) for mesh in built.meshes]
     failures = []
     with all_or_nothing():  # every output, sidecar and the report, or none of them
-        write_options = WriteOptions(built.up, built.meters_per_unit, built.units, table.gltf_options(values))
+        write_options = WriteOptions(built.up, built.meters_per_unit, built.units, GltfOptions.from_options(values))
         written = [write(output, surfaces, write_options) for output in outputs]
         if args.report:
             failures = write_report(args.report, list(built.meshes), args.scene)

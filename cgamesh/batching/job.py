@@ -36,11 +36,11 @@ def mesh_input(path: Path, outputs: Sequence[Path], options: Mapping) -> dict:
     be meshed)."""
     from cgamesh.api import load
     from cgamesh.inputs.formats import format_of
-    from cgamesh.options import for_input, gltf_options
+    from cgamesh.options import for_input, given, write_keywords
 
     meshes = load(path, **for_input(options, format_of(path).kind))
-    gltf = gltf_options(options)
-    written = [meshes.export(output, tangents=gltf.tangents, quantize=gltf.quantize) for output in outputs]
+    writing = {name: value for name, value in given(options).items() if name in write_keywords()}
+    written = [meshes.export(output, **writing) for output in outputs]
     return {"vertices": sum(mesh.vertex_count for mesh, _ in meshes.surfaces), "bytes": sum(written),
             "left_out": len(meshes.skipped)}
 

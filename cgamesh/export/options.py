@@ -26,6 +26,14 @@ class GltfOptions:
     tangents: bool = False
     quantize: bool = False
 
+    @classmethod
+    def from_options(cls, values) -> GltfOptions:
+        """The glTF options of ``values`` (a mapping by the names of the table in
+        cgamesh.options: those with ``writes="gltf"``) that were given; the defaults else."""
+        from cgamesh.options import for_writer
+
+        return cls(**for_writer(values, "gltf"))
+
 
 @dataclass(frozen=True)
 class WriteOptions:
