@@ -281,15 +281,20 @@ def check_keywords(values: Mapping, allowed: tuple[str, ...], kind: InputKind | 
 
 
 def refuse_elsewhere(values: Mapping, kind: InputKind, source: str) -> None:
-    """The command line's refusal of an option given for an input it does not concern."""
+    """The command line's refusal of an option given for an input (``source``, of ``kind``) it
+    does not concern, saying which inputs it is for and, where the table says, what to give instead."""
     from cgamesh.inputs import formats
 
     for option in OPTIONS:
         if kind not in option.inputs and option.given(values.get(option.name)):
+            if SCENE in option.inputs:
+                where = "scene files"
+            else:
+                where = f"centreline inputs ({', '.join(formats.suffixes(CENTERLINES))})"
             if option.elsewhere is not None:
-                raise InvalidInputError(f"{option.flag} applies to scene files; {option.elsewhere}")
-            raise InvalidInputError(f"{option.flag} applies to centreline inputs "
-                                    f"({', '.join(formats.suffixes(CENTERLINES))}), not to the scene file {source}")
+                raise InvalidInputError(f"{option.flag} applies to {where}; {option.elsewhere}")
+            this = "the scene file" if kind is SCENE else "the centreline input"
+            raise InvalidInputError(f"{option.flag} applies to {where}, not to {this} {source}")
 
 
 def refuse_exclusive(values: Mapping, kinds, spell=flag) -> None:

@@ -32,17 +32,19 @@ def argument_type(parse):
     return checked
 
 
-def add_option_flags(parser: argparse.ArgumentParser) -> tuple[str, ...]:
-    """One flag per option of the table in cgamesh.options, in a --help section per group;
-    returns their names (argparse dests, the table's names). A value not given is None (a
-    switch: False), which the table reads as "not given"."""
+def add_option_flags(parser: argparse.ArgumentParser, names: tuple[str, ...] | None = None) -> tuple[str, ...]:
+    """One flag per option of the table in cgamesh.options (or of those ``names``), in a --help
+    section per group; returns their names (argparse dests, the table's names). A value not
+    given is None (a switch: False), which the table reads as "not given"."""
     from cgamesh.inputs.formats import InputKind, suffixes
     from cgamesh.options import OPTIONS, Choice, Group
 
+    chosen = [option for option in OPTIONS if names is None or option.name in names]
     titles = {Group.MESHING: Group.MESHING.value,
               Group.CENTERLINES: f"{Group.CENTERLINES.value} ({', '.join(suffixes(InputKind.CENTERLINES))})"}
-    groups = {group: parser.add_argument_group(title) for group, title in titles.items()}
-    for option in OPTIONS:
+    groups = {group: parser.add_argument_group(title) for group, title in titles.items()
+              if any(option.group is group for option in chosen)}
+    for option in chosen:
         group = groups[option.group]
         if option.is_switch:
             group.add_argument(option.flag, dest=option.name, action="store_true", help=option.help)
@@ -51,7 +53,7 @@ def add_option_flags(parser: argparse.ArgumentParser) -> tuple[str, ...]:
         else:
             group.add_argument(option.flag, dest=option.name, type=argument_type(option.value.parse),
                                metavar=option.metavar, help=option.help)
-    return tuple(option.name for option in OPTIONS)
+    return tuple(option.name for option in chosen)
 
 
 def option_values(args: argparse.Namespace) -> dict:
