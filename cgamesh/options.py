@@ -142,6 +142,9 @@ class Option:
               an option only the writers or the command line read.
     writes:   the part of the writers' WriteOptions it fills ("gltf"), or None.
     group:    its --help section; metavar: the flag's value in --help.
+    elsewhere: what to give instead, in the refusal for an input of another kind.
+    stricter: a stricter check of the value for one kind of input (``around``: a tube needs 3
+              vertices around, where a ribbon is 2 across); ``value_for(kind)``.
     """
 
     name: str
@@ -154,6 +157,7 @@ class Option:
     group: Group = Group.MESHING
     metavar: str | None = None
     elsewhere: str | None = None
+    stricter: tuple[tuple[InputKind, WholeNumber | PositiveNumber], ...] = ()
 
     @property
     def flag(self) -> str:
@@ -162,6 +166,10 @@ class Option:
     @property
     def keyword_for(self) -> frozenset[InputKind]:
         return self.inputs if self.keyword is None else self.keyword
+
+    def value_for(self, kind: InputKind | None):
+        """The check a value of this option passes for an input of ``kind`` (None: any kind)."""
+        return dict(self.stricter).get(kind, self.value)
 
     @property
     def is_switch(self) -> bool:
@@ -192,7 +200,7 @@ class Exclusive:
 
 OPTIONS: tuple[Option, ...] = (
     Option("around", WholeNumber(2), "vertices around every circle, or across every ribbon (overrides the file)",
-           default=8),
+           default=8, stricter=((CENTERLINES, WholeNumber(3)),)),
     Option("along", WholeNumber(2), "rings along every surface (overrides the file)", inputs=frozenset({SCENE}),
            elsewhere="for centreline inputs give --subdivide K (rings between consecutive nodes)"),
     Option("tolerance", PositiveNumber(), "largest distance of every mesh from its true surface, in file units "
@@ -275,7 +283,7 @@ def check_keywords(values: Mapping, allowed: tuple[str, ...], kind: InputKind | 
         raise InvalidInputError(f"unknown option {unknown[0]!r}; expected one of {', '.join(allowed)}")
     for name, value in values.items():
         if value is not None:
-            BY_NAME[name].value.check(name, value)
+            BY_NAME[name].value_for(kind).check(name, value)
     if kind is not None:
         refuse_exclusive(values, {kind}, spell=str)
 

@@ -126,6 +126,8 @@ def test_caps_from_the_command_line_close_the_tubes(tmp_path, capsys):
     (["--tolerance", "0.1", "--subdivide", "2"], "--tolerance cannot be combined with --around or --subdivide"),
     (["--split", "--watertight"], "--watertight makes one surface; it cannot be combined with --split"),
     (["--strict", "--keep-going"], "--keep-going and --strict exclude each other"),
+    (["--around", "2"], "around must be >= 3, got 2"),  # the table's stricter check for tubes
+    (["--subdivide", "-1"], "argument --subdivide: expected a whole number >= 0, got -1 (see cgamesh --help)"),
 ])
 def test_the_command_line_refuses_what_the_table_refuses(tmp_path, capsys, argv, message):
     source = tmp_path / "line.npz"
