@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from cgamesh.errors import InvalidInputError
-from cgamesh.export.options import GltfOptions, WriteOptions  # noqa: E402
+from cgamesh.export.options import GltfOptions, WriteOptions
 from cgamesh.meshing.colors import colormap, segment_colors
 from cgamesh.meshing.mesh import SurfaceMesh
 from closed_pieces import arbor, frustum, sphere
