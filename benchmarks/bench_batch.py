@@ -41,7 +41,7 @@ sys.path.insert(0, str(ROOT))
 
 import cgamesh  # noqa: E402
 from cgamesh.batching.engine import run_batch  # noqa: E402
-from cgamesh.batching.job import SCENE_EXTENSIONS  # noqa: E402
+from cgamesh.inputs.formats import InputKind, format_of  # noqa: E402
 from cgamesh_cli.main import main as cgamesh_main  # noqa: E402
 
 EXAMPLES = [p for p in sorted((ROOT / "examples").glob("*.yaml")) if not p.name.startswith("traced_")]
@@ -71,8 +71,9 @@ def make_inputs(sources: list[Path], count: int, folder: Path) -> list[Path]:
 
 
 def kind_of(path: Path) -> str:
-    suffix = path.suffix.lower()
-    return "scene" if suffix in SCENE_EXTENSIONS else "neuron" if suffix == ".swc" else "tractogram"
+    if format_of(path).kind is InputKind.SCENE:
+        return "scene"
+    return "neuron" if path.suffix.lower() == ".swc" else "tractogram"
 
 
 def options_for(kind: str, args: argparse.Namespace) -> dict:

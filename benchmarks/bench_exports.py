@@ -25,6 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from timing import best_of  # noqa: E402 (this script's folder is on sys.path)
 
 from cgamesh.export.gltf import write_glb  # noqa: E402
+from cgamesh.export.options import WriteOptions  # noqa: E402
 from cgamesh.export.usd import write_usd  # noqa: E402
 from cgamesh.material import Material  # noqa: E402
 from cgamesh.meshing.circles import mesh_circle_surface  # noqa: E402
@@ -46,14 +47,14 @@ def main() -> None:
     mesh = mesh_circle_surface(surface, n, n)
     surfaces = [(mesh, Material())]
     vertices = mesh.vertex_count
-    common = {"up": "z", "meters_per_unit": 1.0, "source_units": "m"}
+    common = WriteOptions("z", 1.0, "m")
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         results = {}
         for name, path, write in (("GLB", folder / "t.glb", write_glb), ("USDC", folder / "t.usdc", write_usd),
                                   ("USDZ", folder / "t.usdz", write_usd)):
-            write(path, surfaces, **common)  # warm: imports, allocations
-            results[name] = best_of(args.repeats, lambda: write(path, surfaces, **common))[0]
+            write(path, surfaces, common)  # warm: imports, allocations
+            results[name] = best_of(args.repeats, lambda: write(path, surfaces, common))[0]
             results[name + " bytes"] = path.stat().st_size
         raw = np.zeros(results["GLB bytes"], np.uint8)
 

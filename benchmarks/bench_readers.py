@@ -24,6 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from timing import best_of  # noqa: E402 (this script's folder is on sys.path)
 
 from cgamesh.export.gltf import write_glb  # noqa: E402
+from cgamesh.export.options import WriteOptions  # noqa: E402
 from cgamesh.inputs.scene import load_scene  # noqa: E402
 from cgamesh.material import Material  # noqa: E402
 from cgamesh.meshing.circles import mesh_circle_surface  # noqa: E402
@@ -65,7 +66,7 @@ def main() -> None:
     mesh = mesh_circle_surface(surface, n, n)
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "t.glb"
-        write_glb(path, [(mesh, Material())], up="z", meters_per_unit=1.0, source_units="m")
+        write_glb(path, [(mesh, Material())], WriteOptions("z", 1.0, "m"))
         checked_time, checked = best_of(args.repeats, lambda: read_gltf(path)[0])
         baseline_time, baseline = best_of(args.repeats, lambda: unchecked_read(path))
     np.testing.assert_array_equal(checked.positions, baseline[0])

@@ -28,6 +28,7 @@ from euclidean_tube import euclidean_tube  # noqa: E402
 from timing import best_of  # noqa: E402
 
 from cgamesh.export.gltf import write_glb  # noqa: E402
+from cgamesh.export.options import WriteOptions  # noqa: E402
 from cgamesh.material import Material  # noqa: E402
 from cgamesh.meshing.circles import mesh_circle_surface  # noqa: E402
 from cgamesh.pipelines.scene import build_surface  # noqa: E402
@@ -70,7 +71,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as folder:
         target = Path(folder) / "tube.glb"
         glb_seconds, _ = best_of(args.repeats, lambda: write_glb(
-            target, [(mesh, Material())], up="z", meters_per_unit=1.0, source_units="m"))
+            target, [(mesh, Material())], WriteOptions("z", 1.0, "m")))
         cold_scene = EXAMPLES / "kb_tube.yaml"
         start = time.perf_counter()
         command = Path(sys.executable).with_name("cgamesh")  # the console script beside this Python

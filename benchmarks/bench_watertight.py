@@ -30,6 +30,7 @@ from closed_pieces import arbor  # noqa: E402 (the tests' folder is on sys.path)
 from timing import best_of  # noqa: E402 (this script's folder is on sys.path)
 
 from cgamesh.export.gltf import write_glb  # noqa: E402
+from cgamesh.export.options import WriteOptions  # noqa: E402
 from cgamesh.material import Material  # noqa: E402
 from cgamesh.meshing.watertight import union  # noqa: E402
 
@@ -77,8 +78,8 @@ def main() -> None:
     alone_time, _ = best_of(args.repeats, lambda: boolean_alone(pieces))
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "arbor.glb")
-        glb_time, size = best_of(args.repeats, lambda: write_glb(path, [(result, Material())], up="z",
-                                                                 meters_per_unit=1e-6, source_units="um"))
+        glb_time, size = best_of(args.repeats, lambda: write_glb(path, [(result, Material())],
+                                                                 WriteOptions("z", 1e-6, "um")))
     print(f"union: {result.vertex_count:,} vertices, {result.triangle_count:,} triangles (closed, 2-manifold)")
     print(f"union             {union_time * 1e3:8.1f} ms  ({union_time / len(pieces) * 1e3:.2f} ms/piece, "
           f"{union_time / glb_time:.1f} x the GLB write)")

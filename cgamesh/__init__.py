@@ -5,6 +5,10 @@ centrelines (neuron skeletons, tractograms, arrays).
 (cgamesh.api) return a ``Meshes``; ``cgamesh.batch(inputs, outdir, client=None, **options)``
 (cgamesh.batching) meshes whole datasets on Dask. Importing the package stays light: those
 modules (and Dask) are imported on first use.
+
+The inputs they read are the table of cgamesh.inputs.formats; the options they take, and the
+command line's flags, the table of cgamesh.options; what the writers are told,
+cgamesh.export.options.WriteOptions.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
     import cgamesh
 
-    neuron = cgamesh.load("neuron.swc", color_by="radius")        # SWC, .trk, .tck, .trx, .npz or a scene
+    neuron = cgamesh.load("neuron.swc", color_by="radius")        # SWC, .trk, .tck, .trx, .npz, a scene...
     neuron.positions, neuron.normals, neuron.uvs, neuron.faces   # plain numpy arrays
     neuron.export("neuron.glb")                                   # any output format, written atomically
 
@@ -26,11 +26,10 @@ import numpy as np
 from cgamesh.errors import InvalidInputError
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.options import CENTERLINES, keywords
 
-SCENE_SUFFIXES = (".yaml", ".yml")
-SCENE_OPTIONS = ("around", "along", "tolerance", "tangents")
-TUBE_OPTIONS = ("radius", "min_radius", "up", "around", "subdivide", "tolerance", "color_by", "split",
-                "watertight", "strict", "caps")
+# cgamesh.tubes takes the centreline options but ``units``, which is its own parameter.
+TUBE_KEYWORDS = tuple(name for name in keywords(CENTERLINES) if name != "units")
 
 
 @dataclass(frozen=True)
@@ -91,13 +90,20 @@ class Meshes:
         a field of the file, ``scalar`` (empty for scene files)."""
         return dict(self._joined.attributes or {})
 
-    def export(self, path: str | os.PathLike[str], *, tangents: bool = False, quantize: bool = False) -> int:
+    def export(self, path: str | os.PathLike[str], **options: bool) -> int:
         """Write every surface to ``path`` in the format of its extension (.glb, .gltf, .usda,
-        .usdc, .usd, .usdz, .obj, .ply, .stl), atomically; returns the bytes written."""
+        .usdc, .usd, .usdz, .obj, .ply, .stl), atomically; returns the bytes written.
+
+        ``options``: the writer options of the table in cgamesh.options (``write_keywords``):
+        ``tangents``, ``quantize`` (glTF; other formats have no use for them).
+        """
+        from cgamesh import options as table
+        from cgamesh.export.options import GltfOptions, WriteOptions
         from cgamesh.export.registry import write
 
-        return write(path, list(self.surfaces), up=self.up, meters_per_unit=self.meters_per_unit,
-                     source_units=self.units, tangents=tangents, quantize=quantize)
+        table.check_keywords(options, table.write_keywords())
+        return write(path, list(self.surfaces), WriteOptions(self.up, self.meters_per_unit, self.units,
+                                                             GltfOptions.from_options(options)))
 
     def to_trimesh(self):
         """One ``trimesh.Trimesh`` of every surface (welded seams kept apart: UVs differ there),
@@ -115,30 +121,33 @@ class Meshes:
 
 
 def load(path: str | os.PathLike[str], **options: Any) -> Meshes:
-    """Mesh any input file: a scene (.yaml/.yml) or centrelines (.swc, .trk, .tck, .trx, .npz).
+    """Mesh any input file: a scene (.yaml/.yml), centrelines (.swc, .trk, .tck, .trx, .npz) or
+    a file of a registered format (cgamesh.inputs.formats).
 
     Scene options: ``around``, ``along``, ``tolerance``, ``tangents`` (as on the command line).
-    Centreline options (``cgamesh.centerline_pipeline.TubeOptions``): ``radius``,
+    Centreline options (``cgamesh.pipelines.tube_options.TubeOptions``): ``radius``,
     ``min_radius``, ``units`` (nm, um, mm, cm, m; default the format's), ``up`` (x, y, z),
     ``around`` (8), ``subdivide`` (3) or ``tolerance``, ``color_by`` (none, radius,
     direction, segment or a per-point field), ``split``, ``watertight``, ``caps``, ``strict``.
-    Mistakes raise ``cgamesh.errors.InvalidInputError`` with a one-line message.
+    Both lists are ``cgamesh.options.keywords(kind)``, the table the command line's flags come
+    from. Mistakes raise ``cgamesh.errors.InvalidInputError`` with a one-line message.
     """
+    from cgamesh import options as table
+    from cgamesh.inputs.formats import InputKind, format_of
+
     name = os.fspath(path)
-    if os.path.splitext(name)[1].lower() in SCENE_SUFFIXES:
-        _known(options, SCENE_OPTIONS)
-        from cgamesh.inputs.scene import load_scene
+    found = format_of(name)
+    table.check_keywords(options, table.keywords(found.kind), found.kind)
+    given = table.given(options)
+    if found.kind is InputKind.SCENE:
         from cgamesh.pipelines.scene import Resolution, mesh_scene
 
-        scene = load_scene(name)
-        resolution = Resolution(options.get("around"), options.get("along"), options.get("tolerance"))
-        surfaces = mesh_scene(scene, resolution, tangents=bool(options.get("tangents", False)))
+        scene = found.read(name)
+        surfaces = mesh_scene(scene, Resolution.from_options(given), tangents=bool(given.get("tangents", False)))
         return Meshes(tuple(surfaces), up=scene.up, units=scene.units, meters_per_unit=scene.meters_per_unit)
-    from cgamesh.inputs.centerlines import read_centerlines
+    from cgamesh.inputs.formats import read_centerlines
 
-    units = options.pop("units", None)
-    _known(options, TUBE_OPTIONS)
-    return _mesh(read_centerlines(name, units=units), options)
+    return _mesh(read_centerlines(name, units=given.get("units")), given)
 
 
 def tubes(polylines: np.ndarray | Sequence[np.ndarray], radii: float | np.ndarray | Sequence[np.ndarray] | None = None,
@@ -155,9 +164,12 @@ def tubes(polylines: np.ndarray | Sequence[np.ndarray], radii: float | np.ndarra
     units:     the length unit of points and radii; ``name`` names the meshes and messages.
     options:   as for ``load``'s centreline options.
     """
+    from cgamesh import options as table
     from cgamesh.inputs.arrays import centerlines_from_arrays
+    from cgamesh.inputs.formats import InputKind
 
-    _known(options, TUBE_OPTIONS)
+    table.check_keywords(options, TUBE_KEYWORDS, InputKind.CENTERLINES)
+    options = table.given(options)
     arrays: dict[str, np.ndarray] = {}
     single = isinstance(polylines, np.ndarray) or (len(polylines) and np.ndim(polylines[0]) == 1)
     if parents is not None or single:
@@ -218,12 +230,6 @@ def _flat(values, pieces, name: str, key: str) -> np.ndarray:
 def _mesh(lines, options: dict) -> Meshes:
     from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
 
-    built = mesh_centerlines(lines, TubeOptions(**options))
+    built = mesh_centerlines(lines, TubeOptions.from_options(options))
     return Meshes(tuple((mesh, built.material) for mesh in built.meshes), up=built.up, units=built.units,
                   meters_per_unit=built.meters_per_unit, skipped=built.skipped)
-
-
-def _known(options: dict, allowed: tuple[str, ...]) -> None:
-    unknown = sorted(set(options) - set(allowed))
-    if unknown:
-        raise InvalidInputError(f"unknown option {unknown[0]!r}; expected one of {', '.join(allowed)}")

@@ -7,28 +7,60 @@ import argparse
 
 def whole_number(minimum: int):
     """An argparse type accepting whole numbers >= ``minimum``."""
+    from cgamesh.options import WholeNumber
 
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"expected a whole number >= {minimum}, got {value}")
-        return value
-
-    return parse
+    return argument_type(WholeNumber(minimum).parse)
 
 
 def positive_number(text: str) -> float:
     """An argparse type accepting finite numbers > 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not 0.0 < value < float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text}")
-    return value
+    from cgamesh.options import PositiveNumber
+
+    return argument_type(PositiveNumber().parse)(text)
+
+
+def argument_type(parse):
+    """``parse`` (text -> value, ValueError saying what was expected) as an argparse type, so
+    argparse prints that message: ``argument --around: expected a whole number >= 2, got 1``."""
+
+    def checked(text: str):
+        try:
+            return parse(text)
+        except ValueError as error:
+            raise argparse.ArgumentTypeError(str(error)) from None
+
+    return checked
+
+
+def add_option_flags(parser: argparse.ArgumentParser, names: tuple[str, ...] | None = None) -> tuple[str, ...]:
+    """One flag per option of the table in cgamesh.options (or of those ``names``), in a --help
+    section per group; returns their names (argparse dests, the table's names). A value not
+    given is None (a switch: False), which the table reads as "not given"."""
+    from cgamesh.inputs.formats import InputKind, suffixes
+    from cgamesh.options import OPTIONS, Choice, Group
+
+    chosen = [option for option in OPTIONS if names is None or option.name in names]
+    titles = {Group.MESHING: Group.MESHING.value,
+              Group.CENTERLINES: f"{Group.CENTERLINES.value} ({', '.join(suffixes(InputKind.CENTERLINES))})"}
+    groups = {group: parser.add_argument_group(title) for group, title in titles.items()
+              if any(option.group is group for option in chosen)}
+    for option in chosen:
+        group = groups[option.group]
+        if option.is_switch:
+            group.add_argument(option.flag, dest=option.name, action="store_true", help=option.help)
+        elif isinstance(option.value, Choice):
+            group.add_argument(option.flag, dest=option.name, choices=option.value.choices, help=option.help)
+        else:
+            group.add_argument(option.flag, dest=option.name, type=argument_type(option.value.parse),
+                               metavar=option.metavar, help=option.help)
+    return tuple(option.name for option in chosen)
+
+
+def option_values(args: argparse.Namespace) -> dict:
+    """The table's options that ``args`` gives (cgamesh.options.given), by name."""
+    from cgamesh.options import BY_NAME, given
+
+    return given({name: getattr(args, name) for name in BY_NAME if hasattr(args, name)})
 
 
 def memory_size(text: str) -> int:

@@ -8,9 +8,7 @@ import argparse
 import json
 import sys
 
-from cgamesh_cli.arguments import whole_number
-from cgamesh_cli import realdata
-from cgamesh_cli.build import add_meshing_options
+from cgamesh_cli.arguments import add_option_flags, whole_number
 
 EXIT_SOME_FAILED = 3
 EXIT_INTERRUPTED = 130  # the shell's status for Ctrl-C
@@ -39,7 +37,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--force", action="store_true", help="mesh every input again, even those already done")
     parser.add_argument("--json", action="store_true", help="print the summary with every input's record as JSON")
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing but the failures")
-    parser.meshing_options = add_meshing_options(parser) + realdata.add_arguments(parser)
+    parser.meshing_options = add_option_flags(parser)  # the table of cgamesh.options, as the single-file command
     return parser
 
 

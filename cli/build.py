@@ -11,7 +11,8 @@ from pathlib import Path
 from cgamesh.errors import InvalidInputError
 from cgamesh.export.registry import WRITERS, writer_for
 from cgamesh_cli import realdata
-from cgamesh_cli.arguments import add_budget_option, positive_number, whole_number
+from cgamesh_cli.arguments import add_budget_option, add_option_flags, option_values
+from cgamesh_cli.report import write_report
 
 EXIT_QUALITY = 1  # --strict and a quality threshold broken
 
@@ -23,53 +24,40 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="other commands: cgamesh render | verify | check | view (see cgamesh COMMAND --help)",
     )
     parser.add_argument("scene", help="the YAML scene file (format version 1), or a centreline file: "
-                                      ".swc, .trk, .tck, .trx, .npz")
+                                      f"{', '.join(centreline_suffixes())}")
     parser.add_argument("-o", "--output", required=True, action="append",
                         help=f"output file, repeatable; its extension picks the format: {', '.join(WRITERS)}")
-    add_meshing_options(parser)
     parser.add_argument("--report", metavar="REPORT.json",
                         help="also write the mesh-quality report (JSON) of the meshes built")
-    parser.add_argument("--strict", action="store_true",
-                        help="with --report: exit 1 when a quality threshold is broken; centreline inputs: "
-                             "a segment that cannot be meshed stops the run (exit 2, nothing written)")
     add_budget_option(parser)
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
-    realdata.add_arguments(parser)
+    add_option_flags(parser)  # the table of cgamesh.options: shared with cgamesh batch
     return parser
 
 
-def add_meshing_options(parser: argparse.ArgumentParser) -> tuple[str, ...]:
-    """Add the options that shape each mesh to ``parser``; their names (argparse dests).
+def centreline_suffixes() -> tuple[str, ...]:
+    from cgamesh.inputs.formats import InputKind, suffixes
 
-    Shared with ``cgamesh batch``, which forwards them, as a plain dict, to every input.
-    """
-    group = parser.add_argument_group("meshing options")
-    actions = [
-        group.add_argument("--around", type=whole_number(2), help="vertices around every circle, or across every ribbon (overrides the file)"),
-        group.add_argument("--along", type=whole_number(2), help="rings along every surface (overrides the file)"),
-        group.add_argument("--tolerance", type=positive_number,
-                           help="largest distance of every mesh from its true surface, in file units "
-                                "(instead of a resolution; overrides the file)"),
-        group.add_argument("--tangents", action="store_true",
-                           help="glTF: write a TANGENT attribute (so normal maps work)"),
-        group.add_argument("--quantize", action="store_true",
-                           help="glTF: store positions, normals and UVs in 16 / 8 bits (KHR_mesh_quantization)"),
-    ]
-    return tuple(action.dest for action in actions)
+    return suffixes(InputKind.CENTERLINES)
 
 
 def run(args: argparse.Namespace) -> str:
     """Build and write every output; returns the summary lines (one per output), or the exit
     status 1 after printing them when --strict finds a quality threshold broken."""
-    if realdata.is_real_data(args.scene):  # before the scene mesher's imports, which it does not need
+    from cgamesh import options as table
+    from cgamesh.inputs.formats import InputKind, find
+
+    found = find(args.scene)
+    if found is not None and found.kind is InputKind.CENTERLINES:  # before the scene mesher's imports
         return realdata.run(args)
     from cgamesh.export.atomic import all_or_nothing
+    from cgamesh.export.options import GltfOptions, WriteOptions
     from cgamesh.export.registry import check_distinct, vertices_written, write
     from cgamesh.pipelines.scene import Resolution, mesh_scene
     from cgamesh.progress import Progress
-    from cgamesh.inputs.scene import load_scene
 
-    realdata.reject_for_scene(args)
+    values = option_values(args)
+    table.refuse_elsewhere(values, InputKind.SCENE, args.scene)
     outputs = [Path(o) for o in args.output]
     for output in outputs:  # refused before any meshing: unknown formats, missing folders
         writer_for(output)
@@ -79,18 +67,18 @@ def run(args: argparse.Namespace) -> str:
         raise InvalidInputError(f"cannot write {args.report}: directory {Path(args.report).parent} does not exist")
     if args.strict and args.report is None:
         raise InvalidInputError("--strict needs --report REPORT.json")
-    if args.tolerance is not None and (args.around is not None or args.along is not None):
-        raise InvalidInputError("--tolerance cannot be combined with --around or --along")
+    table.refuse_exclusive(values, {InputKind.SCENE})
     check_distinct(outputs, args.report, args.scene)
     start = time.perf_counter()
-    scene = load_scene(args.scene, rendering=False)  # the rendering keys are render's and verify's
+    # a file of no known format is read as a scene: its reader's message then says what is wrong
+    scene = (found or table_scene_format()).read(args.scene, rendering=False)  # rendering keys: render's
     with Progress(len(scene.surfaces), enabled=not args.quiet) as progress:
-        meshes = mesh_scene(scene, Resolution(args.around, args.along, args.tolerance), progress=progress.advance,
+        meshes = mesh_scene(scene, Resolution.from_options(values), progress=progress.advance,
                             tangents=args.tangents, max_memory=args.max_memory, outputs=args.output)
+    write_options = WriteOptions(scene.up, scene.meters_per_unit, scene.units, GltfOptions.from_options(values))
     with all_or_nothing():  # every output, sidecar and the report, or none of them
-        written = [write(output, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit, source_units=scene.units,
-                         tangents=args.tangents, quantize=args.quantize) for output in outputs]
-        failures = _write_report(args.report, [mesh for mesh, _ in meshes], args.scene) if args.report else []
+        written = [write(output, meshes, write_options) for output in outputs]
+        failures = write_report(args.report, [mesh for mesh, _ in meshes], args.scene) if args.report else []
     seconds = time.perf_counter() - start
     triangles = sum(mesh.triangle_count for mesh, _ in meshes)
     deviations = [mesh.max_deviation for mesh, _ in meshes if mesh.max_deviation is not None]
@@ -108,12 +96,8 @@ def run(args: argparse.Namespace) -> str:
     return summary
 
 
-def _write_report(path: str, meshes, source: str) -> list[str]:
-    """Write the quality report of ``meshes`` as JSON at ``path`` (atomically); its failures."""
-    from cgamesh.export.atomic import atomic_write
-    from cgamesh.quality import report
+def table_scene_format():
+    """The input table's scene format (the first of its kind)."""
+    from cgamesh.inputs.formats import InputKind, formats
 
-    result = report(meshes, str(source))
-    with atomic_write(path) as f:
-        f.write(result.to_json().encode() + b"\n")
-    return result.failures()
+    return next(f for f in formats() if f.kind is InputKind.SCENE)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from cgamesh_cli.arguments import add_budget_option, finite_number, whole_number
+from cgamesh_cli.arguments import add_budget_option, add_option_flags, finite_number, whole_number
 
 EXIT_QUALITY = 1  # --strict and a threshold broken
 
@@ -19,8 +19,6 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--json", action="store_true", help="print the report as JSON instead of a table")
     parser.add_argument("--report", metavar="REPORT.json", help="also write the report as JSON to this file")
     parser.add_argument("--strict", action="store_true", help="exit 1 when a threshold is broken")
-    parser.add_argument("--around", type=whole_number(2), help="scene files: vertices around every circle")
-    parser.add_argument("--along", type=whole_number(2), help="scene files: rings along every surface")
     parser.add_argument("--max-aspect", type=finite_number, help="also refuse triangles with a larger aspect ratio")
     parser.add_argument("--min-angle", type=finite_number, help="also refuse triangles with a smaller angle (degrees)")
     parser.add_argument("--max-uv-flips", type=whole_number(0), help="also refuse more triangles with flipped UVs")
@@ -28,6 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="also refuse normals further from their faces' (degrees)")
     add_budget_option(parser)
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing (the exit status tells)")
+    add_option_flags(parser, ("around", "along"))  # scene files: the table's (cgamesh.options)
     return parser
 
 
@@ -35,12 +34,14 @@ def run(args: argparse.Namespace):
     """Print the table (or JSON); returns 1 under --strict when a threshold is broken."""
     from cgamesh.quality import Thresholds, load_meshes, report
 
-    path = Path(args.file)
-    if path.suffix.lower() in (".yaml", ".yml"):
-        from cgamesh.pipelines.scene import Resolution, mesh_scene
-        from cgamesh.inputs.scene import load_scene
+    from cgamesh.inputs.formats import InputKind, find
 
-        scene = load_scene(path, rendering=False)  # the rendering keys are render's and verify's
+    path = Path(args.file)
+    found = find(path)
+    if found is not None and found.kind is InputKind.SCENE:
+        from cgamesh.pipelines.scene import Resolution, mesh_scene
+
+        scene = found.read(path, rendering=False)  # the rendering keys are render's and verify's
         meshes = [mesh for mesh, _ in mesh_scene(scene, Resolution(args.around, args.along), max_memory=args.max_memory)]
     else:
         from cgamesh.readers.files import read_limit

@@ -50,9 +50,9 @@ def _main(argv: list[str] | None) -> int:
         return 0
     name = argv[0] if argv and argv[0] in SUBCOMMANDS else None
     module = importlib.import_module(f"cgamesh_cli.{SUBCOMMANDS[name]}" if name else "cgamesh_cli.build")
-    parser = module.build_parser()
-    parser.error = _refuse_usage(parser.prog)  # argparse's own prints the whole usage: one line, as every error
     try:
+        parser = module.build_parser()  # may consult the input table, and so import its plugins
+        parser.error = _refuse_usage(parser.prog)  # argparse's own prints the whole usage: one line, as every error
         args = parser.parse_args(argv[1:] if name else argv)
         result = module.run(args)
     except (CgameshError, _UsageError) as error:

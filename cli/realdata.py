@@ -1,7 +1,8 @@
 """``cgamesh neuron.swc -o neuron.glb``, ``cgamesh bundle.trk -o bundle.glb --radius 0.25``: real-data inputs.
 
-The build command (cli/build.py) hands inputs whose extension names a centreline format
-(.swc, .trk, .tck, .trx, .npz) to ``run`` here; these options are added to its parser. A chain
+The build command (cli/build.py) hands inputs of a centreline format of the input table
+(cgamesh.inputs.formats: .swc, .trk, .tck, .trx, .npz and any registered) to ``run`` here; their
+options are the table's of cgamesh.options, which build's parser has as flags. A chain
 that cannot be meshed is skipped with one line on stderr and exit status 3 (``--keep-going``,
 the default), or stops the run with status 2 and nothing written (``--strict``).
 """
@@ -14,54 +15,21 @@ import time
 from pathlib import Path
 
 from cgamesh.errors import InvalidInputError
-from cgamesh_cli.arguments import positive_number, whole_number
+from cgamesh_cli.arguments import option_values
+from cgamesh_cli.report import write_report
 
 EXIT_SKIPPED = 3
-UNITS = ("nm", "um", "mm", "cm", "m")
-REAL_DATA_OPTIONS = ("radius", "min_radius", "units", "up", "subdivide", "color_by", "split", "watertight",
-                     "keep_going")
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> tuple[str, ...]:
-    """The options of centreline inputs, in a group of their own; their names (argparse dests)."""
-    group = parser.add_argument_group("centreline inputs (.swc, .trk, .tck, .trx, .npz)")
-    group.add_argument("--radius", type=positive_number, help="a constant tube radius (required where the file has none)")
-    group.add_argument("--min-radius", type=positive_number, help="raise smaller radii (and radius 0) to this")
-    group.add_argument("--units", choices=UNITS, help="the file's length unit (default: SWC um, trk/tck/trx mm, npz m)")
-    group.add_argument("--up", choices=("x", "y", "z"), help="which axis of the file points up (default z)")
-    group.add_argument("--subdivide", type=whole_number(0), help="rings between consecutive nodes (default 3)")
-    group.add_argument("--color-by", metavar="none|radius|direction|segment|SCALAR",
-                       help="vertex colours: by radius, |tangent| RGB, segment, or a per-point field of the file")
-    group.add_argument("--split", action="store_true", help="one mesh per segment / streamline instead of one mesh")
-    group.add_argument("--watertight", action="store_true",
-                       help="one closed 2-manifold surface (capped tubes, junctions and soma united)")
-    group.add_argument("--keep-going", action="store_true",
-                       help="skip segments that cannot be meshed, exit 3 (the default; --strict stops instead)")
-    return REAL_DATA_OPTIONS
-
-
-def is_real_data(path: str) -> bool:
-    from cgamesh.inputs.centerlines import is_centerline_file
-
-    return is_centerline_file(path)
-
-
-def reject_for_scene(args: argparse.Namespace) -> None:
-    """A scene file with an option of centreline inputs is a mistake worth one line."""
-    given = [name for name in REAL_DATA_OPTIONS if getattr(args, name, None) not in (None, False)]
-    if given:
-        option = "--" + given[0].replace("_", "-")
-        raise InvalidInputError(f"{option} applies to centreline inputs (.swc, .trk, .tck, .trx, .npz), "
-                                f"not to the scene file {args.scene}")
 
 
 def run(args: argparse.Namespace) -> str | int:
     """Read, mesh and write a centreline input; the summary, or EXIT_SKIPPED after printing it."""
     import numpy as np
 
+    from cgamesh import options as table
     from cgamesh.pipelines.centerlines import TubeOptions, chain_count, mesh_centerlines, uses_batched_pass
+    from cgamesh.export.options import GltfOptions, WriteOptions
     from cgamesh.export.registry import write, writer_for
-    from cgamesh.inputs.centerlines import read_centerlines
+    from cgamesh.inputs.formats import InputKind, read_centerlines
     from cgamesh.progress import Progress
 
     outputs = [Path(o) for o in args.output]
@@ -69,15 +37,9 @@ def run(args: argparse.Namespace) -> str | int:
         writer_for(output)
         if not output.parent.is_dir():
             raise InvalidInputError(f"cannot write {output}: directory {output.parent} does not exist")
-    if args.along is not None:
-        raise InvalidInputError("--along applies to scene files; for centreline inputs give --subdivide K "
-                                "(rings between consecutive nodes)")
-    if args.keep_going and args.strict:
-        raise InvalidInputError("--keep-going and --strict exclude each other")
-    if args.tolerance is not None and (args.subdivide is not None or args.around is not None):
-        raise InvalidInputError("--tolerance cannot be combined with --around or --subdivide")
-    if args.watertight and args.split:
-        raise InvalidInputError("--watertight makes one surface; it cannot be combined with --split")
+    values = option_values(args)
+    table.refuse_elsewhere(values, InputKind.CENTERLINES, args.scene)
+    table.refuse_exclusive(values, {InputKind.CENTERLINES})
     from cgamesh.budget import Budget, centerline_bytes
     from cgamesh.export.atomic import all_or_nothing
     from cgamesh.export.registry import check_distinct, vertices_written
@@ -85,11 +47,7 @@ def run(args: argparse.Namespace) -> str | int:
     check_distinct(outputs, args.report, args.scene)
     start = time.perf_counter()
     lines = read_centerlines(args.scene, units=args.units)
-    options = TubeOptions(radius=args.radius, min_radius=args.min_radius, up=args.up or "z",
-                          around=8 if args.around is None else args.around,
-                          subdivide=3 if args.subdivide is None else args.subdivide, tolerance=args.tolerance,
-                          color_by=args.color_by or "none", split=args.split, watertight=args.watertight,
-                          strict=args.strict)
+    options = TubeOptions.from_options(values)
     chains = chain_count(lines)
     if options.tolerance is None:  # the tolerance's own plan prices a tolerance run
         longest = int(np.diff(lines.offsets).max()) if lines.offsets is not None and len(lines.offsets) > 1 else None
@@ -109,13 +67,10 @@ def run(args: argparse.Namespace) -> str | int:
     surfaces = [(mesh, built.material) for mesh in built.meshes]
     failures = []
     with all_or_nothing():  # every output, sidecar and the report, or none of them
-        written = [write(output, surfaces, up=built.up, meters_per_unit=built.meters_per_unit,
-                         source_units=built.units, tangents=args.tangents, quantize=args.quantize)
-                   for output in outputs]
+        write_options = WriteOptions(built.up, built.meters_per_unit, built.units, GltfOptions.from_options(values))
+        written = [write(output, surfaces, write_options) for output in outputs]
         if args.report:
-            from cgamesh_cli.build import _write_report
-
-            failures = _write_report(args.report, list(built.meshes), args.scene)
+            failures = write_report(args.report, list(built.meshes), args.scene)
     seconds = time.perf_counter() - start
     triangles = sum(m.triangle_count for m in built.meshes)
     held = [vertices_written(output, surfaces) for output in outputs]  # what each file holds (USD welds)

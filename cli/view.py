@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 from cgamesh.errors import InvalidInputError
-from cgamesh_cli.arguments import add_budget_option, whole_number
+from cgamesh_cli.arguments import add_budget_option, add_option_flags
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -18,8 +18,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("scene", help="the YAML scene file")
     parser.add_argument("-o", "--output", required=True, help="the page to write (.html)")
-    parser.add_argument("--around", type=whole_number(2), help="vertices around every circle, or across every ribbon (overrides the file)")
-    parser.add_argument("--along", type=whole_number(2), help="rings along every surface (overrides the file)")
+    add_option_flags(parser, ("around", "along"))  # the table's (cgamesh.options), as cgamesh SCENE.yaml
     add_budget_option(parser)
     parser.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     return parser

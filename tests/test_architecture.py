@@ -44,8 +44,6 @@ KNOWN_CYCLES: set[frozenset[str]] = {
     # batching (the options tables): manifest.py reads ``from cgamesh import __version__``,
     # and the package's ``__getattr__`` imports cgamesh.batching lazily for ``cgamesh.batch``
     frozenset({"cgamesh", "cgamesh.batching", "cgamesh.batching.engine", "cgamesh.batching.manifest"}),
-    # cli (the options tables): realdata borrows build's report writer, build calls realdata
-    frozenset({"cgamesh_cli.build", "cgamesh_cli.realdata"}),
 }
 
 # (b) (importer, private name used, as its full dotted name).
@@ -61,8 +59,6 @@ KNOWN_PRIVATE_USES: set[tuple[str, str]] = {
     ("cgamesh.meshing.scene_batch.ribbon_group", "cgamesh.meshing.ribbons._ruling_values"),
     ("cgamesh.meshing.scene_batch.ribbon_group", "cgamesh.meshing.ribbons._unit"),
     ("cgamesh.meshing.scene_batch.ribbon_group", "cgamesh.meshing.ribbons._unit_normals"),
-    # cli (the options tables): the real-data command writes its report with build's writer
-    ("cgamesh_cli.realdata", "cgamesh_cli.build._write_report"),
 }
 
 # (c) (importer, forbidden module imported).

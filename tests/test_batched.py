@@ -77,10 +77,14 @@ def assert_true_tubes(lines, options: TubeOptions) -> None:
         # orthogonal to the ring to O(h^2): the chord between the two neighbours of a vertex
         cosine = np.einsum("kmi,kmi->km", unit, around_tangent) / np.linalg.norm(around_tangent, axis=2)
         assert np.all(np.abs(cosine) <= 1e-9), mesh.name
-        corners = mesh.positions[mesh.faces]
-        geometric = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        with_normals = np.einsum("ti,ti->t", geometric, mesh.normals[mesh.faces].sum(axis=1)) >= 0.0
-        assert with_normals.mean() >= 0.99, mesh.name
+        # a tube whose radius is large against its bend folds over itself (neighbouring normals
+        # turn by more than a right angle there); elsewhere every triangle winds with its normals
+        folds = (np.einsum("kmi,kmi->km", unit[1:], unit[:-1]).min(initial=1.0) < 0.0
+                 or np.einsum("kmi,kmi->km", unit, np.roll(unit, 1, axis=1)).min(initial=1.0) < 0.0)
+        if not folds:
+            corners = mesh.positions[mesh.faces]
+            geometric = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+            assert np.all(np.einsum("ti,ti->t", geometric, mesh.normals[mesh.faces].sum(axis=1)) >= 0.0), mesh.name
 
 
 def assert_same(lines, options: TubeOptions) -> None:
@@ -245,7 +249,7 @@ def test_random_trees_with_a_soma(count, seed, soma_nodes, split):
 @given(st.lists(st.lists(st.booleans(), min_size=1, max_size=9), min_size=1, max_size=6), st.integers(0, 2**31 - 1))
 def test_outside_radii_are_the_per_chain_paths(inside_lists, seed):
     """Each node inside takes the radius of the nearest node of its chain outside, the earlier
-    of two as near: centerline_pipeline._tube's argmin, chain by chain."""
+    of two as near: pipelines.tubes.tube_spec's argmin, chain by chain."""
     from cgamesh.meshing.batch_pass.chains import _outside_radii
 
     counts = np.array([len(c) for c in inside_lists])

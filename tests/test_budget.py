@@ -13,6 +13,7 @@ import pytest
 
 from cgamesh import budget
 from cgamesh.budget import Budget, ResourceLimitError, format_size, parse_size
+from cgamesh.export.options import WriteOptions
 from cgamesh.export.registry import write
 from cgamesh.geometry.curves.bezier import bernstein
 from cgamesh.inputs.scene import load_scene, parse_scene
@@ -251,8 +252,7 @@ def test_the_mesh_estimate_covers_meshing_and_writing(tmp_path, example, around,
 
     def work(resolution):
         meshes = mesh_scene(scene, resolution)
-        write(tmp_path / f"out{suffix}", meshes, up=scene.up, meters_per_unit=scene.meters_per_unit,
-              source_units=scene.units)
+        write(tmp_path / f"out{suffix}", meshes, WriteOptions(scene.up, scene.meters_per_unit, scene.units))
 
     work(Resolution(4, 4))  # the format's library imported first: a fixed cost, not the mesh's
     measured = _peak(lambda: work(resolution))

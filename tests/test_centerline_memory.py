@@ -10,6 +10,7 @@ import numpy as np
 from cgamesh import budget
 from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
 from cgamesh.export.gltf import write_glb
+from cgamesh.export.options import WriteOptions
 from cgamesh.inputs.centerlines import Centerlines, read_centerlines
 from realdata_files import fornix
 
@@ -29,8 +30,7 @@ def _peak_of_run(lines: Centerlines, path, as_written: bool = False) -> tuple[in
     tracemalloc.start()
     try:
         built = mesh_centerlines(lines, TubeOptions(radius=0.5), as_written=as_written)
-        written = write_glb(path, [(m, built.material) for m in built.meshes], up=built.up,
-                            meters_per_unit=built.meters_per_unit, source_units=built.units)
+        written = write_glb(path, [(m, built.material) for m in built.meshes], WriteOptions(built.up, built.meters_per_unit, built.units))
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()

@@ -15,6 +15,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from cgamesh.errors import ExportError, InvalidInputError
+from cgamesh.export.options import GltfOptions, WriteOptions
 from cgamesh.export.registry import write
 from cgamesh.inputs.scene import load_scene
 from cgamesh.meshing.colors import (COLORMAPS, NAN_COLOR, colormap, direction_colors, linear_to_srgb,
@@ -164,8 +165,8 @@ def coloured():
     return scene, out
 
 
-def _write(path, scene, meshes, **options) -> Path:
-    write(path, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit, source_units=scene.units, **options)
+def _write(path, scene, meshes, **gltf) -> Path:
+    write(path, meshes, WriteOptions(scene.up, scene.meters_per_unit, scene.units, GltfOptions(**gltf)))
     return Path(path)
 
 
@@ -291,7 +292,7 @@ def test_large_meshes_get_32_bit_indices_and_small_ones_16_bit(tmp_path, gltf_va
     for count, component in ((65535, pygltflib.UNSIGNED_SHORT), (65536, pygltflib.UNSIGNED_INT)):
         mesh = strip(count)
         path = tmp_path / f"strip{count}.glb"
-        write(path, [(mesh, _material())], up="z", meters_per_unit=1.0, source_units="m", quantize=True)
+        write(path, [(mesh, _material())], WriteOptions("z", 1.0, "m", GltfOptions(quantize=True)))
         assert_clean(gltf_validate(path))
         gltf = pygltflib.GLTF2().load(str(path))
         assert gltf.accessors[gltf.meshes[0].primitives[0].indices].componentType == component
@@ -303,7 +304,7 @@ def test_large_meshes_get_32_bit_indices_and_small_ones_16_bit(tmp_path, gltf_va
 def test_large_meshes_keep_their_indices_in_usd_and_ply(tmp_path):
     mesh = strip(70001)
     path = tmp_path / "strip.ply"
-    write(path, [(mesh, _material())], up="z", meters_per_unit=1.0, source_units="m")
+    write(path, [(mesh, _material())], WriteOptions("z", 1.0, "m"))
     (got,) = read_trimesh(path)
     np.testing.assert_array_equal(got.faces, mesh.faces)
     np.testing.assert_array_equal(got.attributes["radius"], mesh.attributes["radius"].astype(np.float32))
@@ -311,7 +312,7 @@ def test_large_meshes_keep_their_indices_in_usd_and_ply(tmp_path):
 
     pxr_or_skip()
     path = tmp_path / "strip.usdc"
-    write(path, [(mesh, _material())], up="z", meters_per_unit=1.0, source_units="m")
+    write(path, [(mesh, _material())], WriteOptions("z", 1.0, "m"))
     (got,) = read_usd(path)
     corners = mesh.faces.ravel()
     centre = 0.5 * (mesh.positions.min(axis=0) + mesh.positions.max(axis=0))  # the mesh's translate

@@ -17,6 +17,7 @@ import pytest
 
 from cgamesh_cli.main import main
 from cgamesh.errors import ExportError
+from cgamesh.export.options import WriteOptions
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.readers.readback import read_gltf
@@ -181,7 +182,7 @@ def test_no_writer_writes_a_non_finite_or_float32_overflowing_value(tmp_path, su
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             with pytest.raises(ExportError, match=key):
-                write(out, [(mesh, Material())], up="z", meters_per_unit=1.0, source_units="m")
+                write(out, [(mesh, Material())], WriteOptions("z", 1.0, "m"))
         assert not out.exists()
 
 

@@ -14,6 +14,7 @@ import trimesh
 from cgamesh.errors import ExportError
 from cgamesh.export import atomic
 from cgamesh.export.gltf import write_glb
+from cgamesh.export.options import WriteOptions
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
 from gltf_validator import assert_clean
@@ -69,7 +70,7 @@ def scene():
 @pytest.mark.parametrize(("up", "scale", "units"), [("z", 1.0, "m"), ("y", 0.01, "cm"), ("z", 0.001, "mm")])
 def test_glb_is_valid_and_round_trips_through_pygltflib(tmp_path, gltf_validate, scene, up, scale, units):
     path = tmp_path / "scene.glb"
-    written = write_glb(path, scene, up=up, meters_per_unit=scale, source_units=units)
+    written = write_glb(path, scene, WriteOptions(up, scale, units))
     assert written == path.stat().st_size
     assert_clean(gltf_validate(path))
 
@@ -113,7 +114,7 @@ def test_glb_is_valid_and_round_trips_through_pygltflib(tmp_path, gltf_validate,
 
 def test_trimesh_reload_matches_and_winding_agrees_with_normals(tmp_path, scene):
     path = tmp_path / "scene.glb"
-    write_glb(path, scene, up="z", meters_per_unit=1.0, source_units="m")
+    write_glb(path, scene, WriteOptions("z", 1.0, "m"))
     loaded = trimesh.load(path, force="scene", process=False)
     assert sorted(loaded.geometry) == sorted(m.name for m, _ in scene)
     for mesh, _ in scene:
@@ -132,7 +133,7 @@ def test_trimesh_reload_matches_and_winding_agrees_with_normals(tmp_path, scene)
 def test_far_from_origin_keeps_float32_precision(tmp_path, gltf_validate):
     mesh = torus_patch("far", 33, 17, centre=(1e5, -1e5 / 3, 7e4))
     path = tmp_path / "far.glb"
-    write_glb(path, [(mesh, Material())], up="z", meters_per_unit=1.0, source_units="m")
+    write_glb(path, [(mesh, Material())], WriteOptions("z", 1.0, "m"))
     assert_clean(gltf_validate(path))
     expected = expected_positions(mesh, "z", 1.0)
     size = np.ptp(expected, axis=0).max()
@@ -161,7 +162,7 @@ def _trimesh_world_positions(path):
 def test_index_type_follows_vertex_count(tmp_path, gltf_validate, n_around, n_along, component):
     mesh = torus_patch("grid", n_around, n_along)
     path = tmp_path / "grid.glb"
-    write_glb(path, [(mesh, Material())], up="z", meters_per_unit=1.0, source_units="m")
+    write_glb(path, [(mesh, Material())], WriteOptions("z", 1.0, "m"))
     assert_clean(gltf_validate(path))
     gltf = pygltflib.GLTF2().load(str(path))
     prim = gltf.meshes[0].primitives[0]
@@ -189,7 +190,7 @@ def test_non_finite_values_raise_and_write_nothing(tmp_path, field, value):
     mesh = _poisoned(torus_patch("bad", 5, 4), field, value)
     path = tmp_path / "bad.glb"
     with pytest.raises(ExportError, match=f"'bad'.*{field}"):
-        write_glb(path, [(mesh, Material())], up="z", meters_per_unit=1.0, source_units="m")
+        write_glb(path, [(mesh, Material())], WriteOptions("z", 1.0, "m"))
     assert os.listdir(tmp_path) == []
 
 
@@ -198,7 +199,7 @@ def test_refused_export_leaves_existing_file_intact(tmp_path):
     path.write_bytes(b"previous good file")
     mesh = _poisoned(torus_patch("bad", 5, 4), "positions", np.nan)
     with pytest.raises(ExportError):
-        write_glb(path, [(mesh, Material())], up="z", meters_per_unit=1.0, source_units="m")
+        write_glb(path, [(mesh, Material())], WriteOptions("z", 1.0, "m"))
     assert path.read_bytes() == b"previous good file" and os.listdir(tmp_path) == ["scene.glb"]
 
 
@@ -212,14 +213,14 @@ def test_failure_mid_write_leaves_existing_file_intact(tmp_path, monkeypatch, sc
 
     monkeypatch.setattr(atomic.os, "fsync", failing_fsync)
     with pytest.raises(ExportError, match="scene.glb: No space left on device"):
-        write_glb(path, scene, up="z", meters_per_unit=1.0, source_units="m")
+        write_glb(path, scene, WriteOptions("z", 1.0, "m"))
     assert path.read_bytes() == b"previous good file" and os.listdir(tmp_path) == ["scene.glb"]
 
 
 def test_missing_directory_is_an_export_error(tmp_path, scene):
     path = tmp_path / "no" / "such" / "scene.glb"
     with pytest.raises(ExportError) as info:
-        write_glb(path, scene, up="z", meters_per_unit=1.0, source_units="m")
+        write_glb(path, scene, WriteOptions("z", 1.0, "m"))
     message = str(info.value)
     assert "\n" not in message and str(path) in message and "does not exist" in message
 
@@ -232,8 +233,7 @@ def test_missing_directory_is_an_export_error(tmp_path, scene):
 ])
 def test_inconsistent_meshes_are_refused(tmp_path, change, match):
     with pytest.raises(ExportError, match=match):
-        write_glb(tmp_path / "x.glb", [(change(torus_patch("m", 5, 4)), Material())],
-                  up="z", meters_per_unit=1.0, source_units="m")
+        write_glb(tmp_path / "x.glb", [(change(torus_patch("m", 5, 4)), Material())], WriteOptions("z", 1.0, "m"))
     assert os.listdir(tmp_path) == []
 
 
@@ -245,13 +245,12 @@ def test_inconsistent_meshes_are_refused(tmp_path, change, match):
 def test_bad_arguments_are_refused(tmp_path, scene, kwargs, match):
     args = {"up": "z", "meters_per_unit": 1.0, "source_units": "m", **kwargs}
     with pytest.raises(ExportError, match=match):
-        write_glb(tmp_path / "x.glb", scene, **args)
+        write_glb(tmp_path / "x.glb", scene, WriteOptions(**args))
 
 
 def test_material_out_of_range_is_refused(tmp_path):
     with pytest.raises(ExportError, match="material"):
-        write_glb(tmp_path / "x.glb", [(torus_patch("m", 5, 4), Material((1.5, 0, 0)))],
-                  up="z", meters_per_unit=1.0, source_units="m")
+        write_glb(tmp_path / "x.glb", [(torus_patch("m", 5, 4), Material((1.5, 0, 0)))], WriteOptions("z", 1.0, "m"))
 
 
 @pytest.mark.slow
@@ -265,7 +264,7 @@ def test_megavertex_write_cost(tmp_path, gltf_validate):
     times = []
     for _ in range(5):
         start = time.perf_counter()
-        written = write_glb(path, [(mesh, Material())], up="z", meters_per_unit=1.0, source_units="m")
+        written = write_glb(path, [(mesh, Material())], WriteOptions("z", 1.0, "m"))
         times.append(time.perf_counter() - start)
     # Baseline in the same run: the same number of bytes written and fsynced as one raw buffer.
     raw = np.zeros(written, np.uint8)
@@ -288,7 +287,7 @@ def test_megavertex_write_cost(tmp_path, gltf_validate):
 
 def test_glb_container_layout(tmp_path, scene):
     path = tmp_path / "scene.glb"
-    write_glb(path, scene, up="z", meters_per_unit=1.0, source_units="m")
+    write_glb(path, scene, WriteOptions("z", 1.0, "m"))
     data = path.read_bytes()
     magic, version, length = np.frombuffer(data[:12], "<u4")
     json_length, json_type = np.frombuffer(data[12:20], "<u4")
@@ -325,11 +324,10 @@ def test_bad_float32_normals_name_their_vertex_in_any_block(tmp_path, value):
     normals = mesh.normals.astype(np.float32)
     normals[70000] *= value
     with pytest.raises(ExportError, match="'tube': normals must be finite unit vectors, vertex 70000 has"):
-        write_glb(tmp_path / "bad.glb", [(_with(mesh, normals=normals), Material())], up="z",
-                  meters_per_unit=1.0, source_units="m")
+        write_glb(tmp_path / "bad.glb", [(_with(mesh, normals=normals), Material())], WriteOptions("z", 1.0, "m"))
     assert os.listdir(tmp_path) == []
 
 
 def _stored_normals_of(path, mesh):
-    write_glb(path, [(mesh, Material())], up="z", meters_per_unit=1.0, source_units="m")
+    write_glb(path, [(mesh, Material())], WriteOptions("z", 1.0, "m"))
     return _stored_normals(path)

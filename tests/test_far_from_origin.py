@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from export_checks import pxr_or_skip
+from cgamesh.export.options import WriteOptions
 from cgamesh.meshing.tolerance.deviation import circle_read_out
 from cgamesh.export.registry import write
 from cgamesh.pipelines.scene import Resolution, build_surface, mesh_scene
@@ -52,7 +53,7 @@ def far():
 def test_glb_positions_through_the_node_translation_stay_on_the_surface(far, tmp_path):
     scene, meshes, surface = far
     path = tmp_path / "far.glb"
-    write(path, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit, source_units=scene.units)
+    write(path, meshes, WriteOptions(scene.up, scene.meters_per_unit, scene.units))
     gltf_world = read_gltf(path, world=True)[0].positions
     # glTF (x, y, z) is the scene's (x, -z, y) for up: z, in metres (units m).
     scene_frame = np.stack([gltf_world[:, 0], -gltf_world[:, 2], gltf_world[:, 1]], axis=1)
@@ -68,7 +69,7 @@ def test_usd_points_through_the_xform_translation_stay_on_the_surface(far, tmp_p
 
     scene, meshes, surface = far
     path = tmp_path / "far.usda"
-    write(path, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit, source_units=scene.units)
+    write(path, meshes, WriteOptions(scene.up, scene.meters_per_unit, scene.units))
     stage = Usd.Stage.Open(str(path))
     prim = next(p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
     matrix = np.array(UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default()), dtype=np.float64)

@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 from direction_strategies import coordinate, direction, sphere_direction
 
 from cgamesh.errors import InvalidInputError
+from cgamesh.export.options import WriteOptions
 from cgamesh.inputs.scene import parse_scene
 from cgamesh.pipelines.scene import Resolution, mesh_scene
 
@@ -197,7 +198,7 @@ def test_every_output_format_writes_what_meshes(tmp_path, drawn, suffix):
     out = tmp_path / f"space{suffix}"
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        write(out, meshes, up="z", meters_per_unit=1.0, source_units="m")
+        write(out, meshes, WriteOptions("z", 1.0, "m"))
     assert out.stat().st_size > 0
     if suffix == ".glb":
         back = read_gltf(out, world=True)[0]

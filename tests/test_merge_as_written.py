@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 
 from cgamesh.pipelines.centerlines import TubeOptions, mesh_centerlines
 from cgamesh.export.gltf import write_glb, write_gltf
+from cgamesh.export.options import WriteOptions
 from cgamesh.inputs.centerlines import Centerlines, read_centerlines
 from cgamesh.meshing.junctions import uv_spheres
 from cgamesh.meshing.merge import MergedMesh
@@ -25,7 +26,7 @@ def _digest(path) -> str:
 
 def _write(path, meshes, writer=write_glb) -> str:
     path.parent.mkdir(exist_ok=True)
-    writer(path, [(m, _material()) for m in meshes], up="z", meters_per_unit=1e-3, source_units="mm")
+    writer(path, [(m, _material()) for m in meshes], WriteOptions("z", 1e-3, "mm"))
     return _digest(path) if path.suffix == ".glb" else _digest(path) + _digest(path.with_suffix(".bin"))
 
 

@@ -147,6 +147,7 @@ def test_a_signal_during_a_large_write_leaves_the_old_outputs_and_no_temporary(t
 WRITER = """
 import os, sys, time
 import cgamesh.export.atomic as atomic
+from cgamesh.export.options import WriteOptions
 from cgamesh.inputs.scene import load_scene
 from cgamesh.pipelines.scene import Resolution, mesh_scene
 from cgamesh.export.gltf import write_gltf
@@ -158,7 +159,7 @@ def slow_replace(src, dst):  # widen the window between the renames of the pair
     time.sleep(0.01)
 atomic.os.replace = slow_replace
 for _ in range(int(sys.argv[4])):
-    write_gltf(sys.argv[2], meshes, up=scene.up, meters_per_unit=scene.meters_per_unit, source_units=scene.units)
+    write_gltf(sys.argv[2], meshes, WriteOptions(scene.up, scene.meters_per_unit, scene.units))
 """
 
 

@@ -14,6 +14,7 @@ import numpy as np
 import pygltflib
 import pytest
 
+from cgamesh.export.options import WriteOptions
 from cgamesh.geometry import objects
 from cgamesh.geometry.algebra import rotors
 from cgamesh.geometry.algebra.conformal import up
@@ -259,7 +260,7 @@ def test_ribbon_examples_export_double_sided_and_validate(tmp_path, gltf_validat
     meshes = [(mesh_surface(spec, Resolution(6, 24)), spec.material) for spec in scene.surfaces]
     assert all(mesh.double_sided for mesh, _ in meshes)
     output = tmp_path / f"{name}.glb"
-    write_glb(output, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit, source_units=scene.units)
+    write_glb(output, meshes, WriteOptions(scene.up, scene.meters_per_unit, scene.units))
     assert_clean(gltf_validate(output))
     document = pygltflib.GLTF2().load(str(output))
     assert document.materials and all(material.doubleSided for material in document.materials)

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
+from cgamesh.export.options import WriteOptions
 from cgamesh.meshing.tolerance.deviation import CIRCLES, SEGMENTS, grid_deviation
 from cgamesh.export.gltf import write_glb
 from cgamesh.meshing.circles import mesh_circle_surface
@@ -95,8 +96,7 @@ def _golden(surface, family, samples, low, high, steps: int = 30) -> np.ndarray:
 def exported_positions(mesh, scene, folder: Path) -> np.ndarray:
     """The mesh's vertices as the GLB stores them, mapped back into the scene's frame."""
     path = folder / "tolerance.glb"
-    write_glb(path, [(mesh, scene.surfaces[0].material)], up=scene.up, meters_per_unit=scene.meters_per_unit,
-              source_units=scene.units)
+    write_glb(path, [(mesh, scene.surfaces[0].material)], WriteOptions(scene.up, scene.meters_per_unit, scene.units))
     world = read_gltf(path, world=True)[0].positions / scene.meters_per_unit
     if scene.up == "z":  # glTF (x, y, z) is the scene's (x, -z, y)
         world = np.stack([world[:, 0], -world[:, 2], world[:, 1]], axis=1)

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from cgamesh.export.gltf import write_glb
+from cgamesh.export.options import GltfOptions, WriteOptions
 from cgamesh.pipelines.scene import Resolution, mesh_scene
 from cgamesh.inputs.scene import load_scene
 from cgamesh.tracer import verify
@@ -91,7 +92,7 @@ def test_verify_exits_1_on_a_broken_file_and_writes_the_comparison_image(tmp_pat
     scene = load_scene(scene_path)
     meshes = mesh_scene(scene, Resolution(12, 24))
     good = tmp_path / "good.glb"
-    write_glb(good, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit, source_units=scene.units)
+    write_glb(good, meshes, WriteOptions(scene.up, scene.meters_per_unit, scene.units))
     image = tmp_path / "diff.png"
     assert main(["verify", str(scene_path), str(good), "--image", str(image), "--size", "40x30"]) == 0
     assert read_png(image).shape == (30, 120, 3)
@@ -99,8 +100,7 @@ def test_verify_exits_1_on_a_broken_file_and_writes_the_comparison_image(tmp_pat
     normals = mesh.normals.copy()
     normals[5] *= -1.0
     bad = tmp_path / "bad.glb"
-    write_glb(bad, [(replace(mesh, normals=normals), material)], up=scene.up, meters_per_unit=scene.meters_per_unit,
-              source_units=scene.units)
+    write_glb(bad, [(replace(mesh, normals=normals), material)], WriteOptions(scene.up, scene.meters_per_unit, scene.units))
     capsys.readouterr()
     assert main(["verify", str(scene_path), str(bad)]) == 1
     assert "FAIL" in capsys.readouterr().out
@@ -110,8 +110,7 @@ def test_verify_reads_quantized_files_within_their_precision(tmp_path):
     scene_path = next(p for p in EXAMPLES if p.stem == "rational_tube")
     scene = load_scene(scene_path)
     glb = tmp_path / "q.glb"
-    write_glb(glb, mesh_scene(scene, Resolution(12, 24)), up=scene.up, meters_per_unit=scene.meters_per_unit,
-              source_units=scene.units, quantize=True)
+    write_glb(glb, mesh_scene(scene, Resolution(12, 24)), WriteOptions(scene.up, scene.meters_per_unit, scene.units, GltfOptions(quantize=True)))
     surface = build_world(scene, primitives=False).surfaces()[0]
     report = verify.check_mesh(surface, read_glb(glb, scene.up, scene.meters_per_unit)[0],
                                verify.Thresholds(max_angle=1.5, max_distance=2e-4))

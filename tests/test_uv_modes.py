@@ -14,6 +14,7 @@ import pytest
 
 from cgamesh.errors import ExportError, SceneFileError
 from cgamesh.export.gltf import write_glb
+from cgamesh.export.options import GltfOptions, WriteOptions
 from cgamesh.pipelines.scene import Resolution, mesh_scene
 from cgamesh.inputs.scene import load_scene, parse_scene
 from cgamesh.meshing.uv import tangents_of
@@ -121,9 +122,9 @@ def test_uv_none_writes_zeros_and_refuses_tangents(tmp_path):
     meshes = mesh_scene(parse_scene(TWO_TUBES.format(uv="none")), Resolution())
     for mesh, _ in meshes:
         assert mesh.uvs.shape == (mesh.vertex_count, 2) and not mesh.uvs.any()
-    write_glb(tmp_path / "a.glb", meshes, up="z", meters_per_unit=1.0, source_units="m")
+    write_glb(tmp_path / "a.glb", meshes, WriteOptions("z", 1.0, "m"))
     with pytest.raises(ExportError, match="no UV layout"):
-        write_glb(tmp_path / "b.glb", meshes, up="z", meters_per_unit=1.0, source_units="m", tangents=True)
+        write_glb(tmp_path / "b.glb", meshes, WriteOptions("z", 1.0, "m", GltfOptions(tangents=True)))
 
 
 @pytest.mark.parametrize(("extra", "match"), [
@@ -182,7 +183,7 @@ def test_xatlas_meshes_export_validate(tmp_path, gltf_validate):
 
     meshes = mesh_scene(parse_scene(TWO_TUBES.format(uv="xatlas")), Resolution())
     path = tmp_path / "atlas.glb"
-    write_glb(path, meshes, up="z", meters_per_unit=1.0, source_units="m", tangents=True, quantize=True)
+    write_glb(path, meshes, WriteOptions("z", 1.0, "m", GltfOptions(tangents=True, quantize=True)))
     assert_clean(gltf_validate(path))
 
 
@@ -195,7 +196,7 @@ def test_quantized_uvs_outside_the_unit_square_stay_float_and_validate(tmp_path,
     meshes = mesh_scene(parse_scene(text), Resolution())
     assert max(m.uvs.max() for m, _ in meshes) > 1.0
     path = tmp_path / "tiled.glb"
-    write_glb(path, meshes, up="z", meters_per_unit=1.0, source_units="m", quantize=True, tangents=True)
+    write_glb(path, meshes, WriteOptions("z", 1.0, "m", GltfOptions(tangents=True, quantize=True)))
     assert_clean(gltf_validate(path))
     gltf = pygltflib.GLTF2().load(str(path))
     uv_accessor = gltf.accessors[gltf.meshes[0].primitives[0].attributes.TEXCOORD_0]

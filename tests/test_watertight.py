@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from cgamesh.errors import InvalidInputError
+from cgamesh.export.options import GltfOptions, WriteOptions
 from cgamesh.meshing.colors import colormap, segment_colors
 from cgamesh.meshing.mesh import SurfaceMesh
 from closed_pieces import arbor, frustum, sphere
@@ -264,7 +265,7 @@ def test_written_unions_pass_the_quality_report(tmp_path, suffix):
 
     for label, pieces in (("neuron", neuron_pieces()), ("arbor", arbor(60, 8, 4, np.random.default_rng(3)))):
         path = tmp_path / f"{label}{suffix}"
-        write(path, [(union(pieces, label), Material())], up="z", meters_per_unit=1e-6, source_units="um")
+        write(path, [(union(pieces, label), Material())], WriteOptions("z", 1e-6, "um"))
         result = report(load_meshes(path), str(path))
         (surface,) = result.surfaces
         assert (surface.boundary_edges, surface.non_manifold_edges, surface.non_manifold_vertices) == (0, 0, 0)
@@ -323,12 +324,11 @@ def test_a_union_with_its_channels_exports_clean(tmp_path, gltf_validate):
     result = union(neuron_pieces(), "neuron")
     for quantize in (False, True):
         path = tmp_path / f"neuron{quantize}.glb"
-        write(path, [(result, Material())], up="z", meters_per_unit=1e-6, source_units="um", quantize=quantize,
-              tangents=True)
+        write(path, [(result, Material())], WriteOptions("z", 1e-6, "um", GltfOptions(tangents=True, quantize=quantize)))
         assert_clean(gltf_validate(path))
     from export_checks import pxr_or_skip, usd_compliance
 
     pxr_or_skip()
     path = tmp_path / "neuron.usdz"
-    write(path, [(result, Material())], up="z", meters_per_unit=1e-6, source_units="um")
+    write(path, [(result, Material())], WriteOptions("z", 1e-6, "um"))
     assert usd_compliance(path) == []

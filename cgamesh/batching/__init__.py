@@ -25,8 +25,9 @@ def batch(inputs, outdir, client=None, **options):
     path a line), ``force``, ``workers``, ``scheduler``, ``retries`` (default 2),
     ``memory_limit`` (per worker, default ``"auto"``: the machine's memory shared out),
     ``progress``, ``on_record`` (called with each input's record as it finishes). Every other
-    keyword is a meshing option of the single-file command (``around``, ``along``,
-    ``tolerance``, ``tangents``, ``quantize``), applied to every input.
+    keyword is a meshing option of the single-file command, from the table in cgamesh.options
+    (``around``, ``along``, ``tolerance``, ``radius``, ``caps``, ``quantize``, ...); each input
+    takes those that concern its kind.
     """
     from cgamesh.batching.engine import run_batch
 

@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from cgamesh.batching.discovery import Input, discover, plan_outputs
-from cgamesh.batching.job import INPUT_EXTENSIONS, check_options, file_sha256, one_line, run_job
+from cgamesh.batching.job import check_options, file_sha256, one_line, run_job
 from cgamesh.batching.manifest import Manifest, normalised, tool_version
 from cgamesh.batching.summary import BatchSummary, InputRecord
 from cgamesh.errors import InvalidInputError
@@ -36,6 +36,7 @@ def run_batch(inputs: str | os.PathLike | Sequence[str | os.PathLike], outdir: s
     """Mesh every input into ``outdir`` (see the package docstring); returns the summary."""
     from cgamesh.batching.cluster import distributed
     from cgamesh.export.registry import WRITERS
+    from cgamesh.inputs.formats import suffixes as input_suffixes
 
     distributed()  # the missing extra is reported before anything else
     if isinstance(inputs, (str, os.PathLike)):
@@ -54,7 +55,8 @@ def run_batch(inputs: str | os.PathLike | Sequence[str | os.PathLike], outdir: s
     start = time.perf_counter()
     # Absolute paths: workers on other machines do not share this process's working folder.
     outdir = Path(outdir).absolute()
-    planned = plan_outputs(discover(inputs, listing, INPUT_EXTENSIONS), outdir, formats)
+    # a folder is searched for every suffix of the input table (formats are not probed there)
+    planned = plan_outputs(discover(inputs, listing, input_suffixes()), outdir, formats)
     Path(outdir).mkdir(parents=True, exist_ok=True)
     manifest = Manifest(outdir)
     version = tool_version()

@@ -17,46 +17,30 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from cgamesh.errors import CgameshError, InvalidInputError
-
-# File extensions a folder given as input is searched for (lower case): scene files and the
-# centreline formats of cgamesh.inputs.centerlines.
-INPUT_EXTENSIONS: tuple[str, ...] = (".yaml", ".yml", ".swc", ".trk", ".tck", ".trx", ".npz")
-SCENE_EXTENSIONS: tuple[str, ...] = (".yaml", ".yml")
-# The meshing options mesh_input understands: the single-file command's (cli/build.py), those
-# that shape every mesh and those of centreline inputs (cli/realdata.py). Each input takes the
-# ones that concern its kind: a scene file ignores --radius, a neuron ignores --along.
-SCENE_OPTIONS: frozenset[str] = frozenset({"around", "along", "tolerance", "tangents"})
-CENTERLINE_OPTIONS: frozenset[str] = frozenset({"radius", "min_radius", "units", "up", "around", "subdivide",
-                                                "tolerance", "color_by", "split", "watertight", "strict"})
-EXPORT_OPTIONS: frozenset[str] = frozenset({"tangents", "quantize"})
-OPTION_NAMES: frozenset[str] = SCENE_OPTIONS | CENTERLINE_OPTIONS | EXPORT_OPTIONS | {"keep_going"}
+from cgamesh.errors import CgameshError
 
 
 def check_options(options: Mapping) -> None:
-    """Refuse unknown or contradictory options once, before any input is meshed."""
-    unknown = sorted(set(options) - OPTION_NAMES)
-    if unknown:
-        raise InvalidInputError(f"unknown meshing option{'s' if len(unknown) > 1 else ''} {', '.join(unknown)}; "
-                                f"expected some of {', '.join(sorted(OPTION_NAMES))}")
-    if options.get("tolerance") is not None and (options.get("around") is not None or options.get("along") is not None):
-        raise InvalidInputError("--tolerance cannot be combined with --around or --along")
-    if options.get("keep_going") and options.get("strict"):
-        raise InvalidInputError("--keep-going and --strict exclude each other")
+    """Refuse unknown or contradictory options once, before any input is meshed (the names
+    and the refused combinations are those of the table in cgamesh.options)."""
+    from cgamesh.options import check_batch
+
+    check_batch(options)
 
 
 def mesh_input(path: Path, outputs: Sequence[Path], options: Mapping) -> dict:
-    """Mesh the input file at ``path`` (a scene or centrelines, by its extension) through
-    ``cgamesh.load`` with the options that concern its kind, and write it to every one of
-    ``outputs`` (the format of each by its extension); returns ``{"vertices": ..., "bytes":
-    ..., "left_out": ...}`` (bytes of all outputs; centreline segments that could not be meshed)."""
+    """Mesh the input file at ``path`` (a scene or centrelines, by its format in the input
+    table) through ``cgamesh.load`` with the given options that its kind takes, and write it to
+    every one of ``outputs`` (the format of each by its extension); returns ``{"vertices": ...,
+    "bytes": ..., "left_out": ...}`` (bytes of all outputs; centreline segments that could not
+    be meshed)."""
     from cgamesh.api import load
+    from cgamesh.inputs.formats import format_of
+    from cgamesh.options import for_input, given, write_keywords
 
-    wanted = SCENE_OPTIONS if path.suffix.lower() in SCENE_EXTENSIONS else CENTERLINE_OPTIONS
-    given = {name: value for name, value in options.items() if name in wanted and value not in (None, False)}
-    meshes = load(path, **given)
-    tangents, quantize = bool(options.get("tangents")), bool(options.get("quantize"))
-    written = [meshes.export(output, tangents=tangents, quantize=quantize) for output in outputs]
+    meshes = load(path, **for_input(options, format_of(path).kind))
+    writing = {name: value for name, value in given(options).items() if name in write_keywords()}
+    written = [meshes.export(output, **writing) for output in outputs]
     return {"vertices": sum(mesh.vertex_count for mesh, _ in meshes.surfaces), "bytes": sum(written),
             "left_out": len(meshes.skipped)}
 

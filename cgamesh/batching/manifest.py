@@ -27,9 +27,12 @@ def tool_version() -> str:
 
 
 def normalised(options: Mapping) -> dict:
-    """Options as the manifest stores them (JSON types, sorted keys, without those left unset
-    as None), so they compare equal after a round trip through the file."""
-    return json.loads(json.dumps({k: v for k, v in options.items() if v is not None}, sort_keys=True))
+    """Options as the manifest stores them: only those given (cgamesh.options.given: not None,
+    a switch on), so the command line's and the Python API's same request are stored alike, in
+    JSON types with sorted keys, so they compare equal after a round trip through the file."""
+    from cgamesh.options import given
+
+    return json.loads(json.dumps(given(options), sort_keys=True))
 
 
 class Manifest:

@@ -10,7 +10,7 @@ box, in metres), with the unit's length in metres as the node's uniform scale: f
 of precision go to the surface's size rather than to its distance from the origin, and a
 position that is a float32 number relative to the centre is stored exactly.
 
-Options:
+Options (``WriteOptions.gltf``, cgamesh.export.options):
 - ``tangents``: a TANGENT attribute (VEC4, w = +-1) so normal maps work: the mesher's analytic
   tangents (the circle's own d/dtheta) or, without them, tangents from the UV gradients
   (``cgamesh.meshing.uv.tangents_of``). The bitangent cross(N, T) * w points along increasing V of
@@ -56,6 +56,7 @@ from cgamesh.errors import ExportError
 from cgamesh.export.atomic import atomic_files, atomic_write
 from cgamesh.export.checks import (FLOAT32_MAX, check_arguments, check_channels, check_material, check_shapes,
                                    column_bounds, normal_length_error, normal_lengths)
+from cgamesh.export.options import WriteOptions
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
 
@@ -84,24 +85,19 @@ _AXIS_MAPS = {
 def write_glb(
     path: str | os.PathLike[str],
     surfaces: Sequence[tuple[SurfaceMesh, Material]],
-    *,
-    up: str,
-    meters_per_unit: float,
-    source_units: str,
-    tangents: bool = False,
-    quantize: bool = False,
+    options: WriteOptions,
 ) -> int:
     """Write every (mesh, material) pair into one GLB file at ``path``; returns bytes written.
 
-    ``up`` is the scene file's up axis ("z" or "y"), ``meters_per_unit`` its length unit in
-    metres and ``source_units`` that unit's name (recorded in ``asset.extras``).
+    ``options.up`` is the scene file's up axis ("z" or "y"), ``options.meters_per_unit`` its
+    length unit in metres and ``options.source_units`` that unit's name (recorded in
+    ``asset.extras``); ``options.gltf`` holds this writer's own options (tangents, quantize).
 
     Raises ExportError, leaving any existing file at ``path`` untouched, when an array holds a
     NaN or an infinity, shapes or indices are inconsistent, a mesh is empty, or the file cannot
     be written.
     """
-    doc, blob = build_document(path, surfaces, up=up, meters_per_unit=meters_per_unit,
-                               source_units=source_units, tangents=tangents, quantize=quantize)
+    doc, blob = build_document(path, surfaces, options)
     doc.buffers.append({"byteLength": blob.nbytes})
     json_bytes = _json_bytes(path, doc)
     json_bytes += b" " * (_pad4(len(json_bytes)) - len(json_bytes))
@@ -121,12 +117,7 @@ def write_glb(
 def write_gltf(
     path: str | os.PathLike[str],
     surfaces: Sequence[tuple[SurfaceMesh, Material]],
-    *,
-    up: str,
-    meters_per_unit: float,
-    source_units: str,
-    tangents: bool = False,
-    quantize: bool = False,
+    options: WriteOptions,
 ) -> int:
     """Write a .gltf JSON file at ``path`` and its buffer beside it (same stem, ``.bin``).
 
@@ -137,8 +128,7 @@ def write_gltf(
     bin_path = target.with_suffix(".bin")
     if bin_path == target:
         raise ExportError(f"cannot export {path}: a .gltf file needs a name that does not end in .bin")
-    doc, blob = build_document(path, surfaces, up=up, meters_per_unit=meters_per_unit,
-                               source_units=source_units, tangents=tangents, quantize=quantize)
+    doc, blob = build_document(path, surfaces, options)
     doc.buffers.append({"uri": quote(bin_path.name), "byteLength": blob.nbytes})
     json_bytes = _json_bytes(path, doc)
     with atomic_files([bin_path, target]) as (bin_file, json_file):
@@ -147,21 +137,21 @@ def write_gltf(
     return len(json_bytes) + blob.nbytes
 
 
-def build_document(path, surfaces, *, up, meters_per_unit, source_units, tangents=False,
-                   quantize=False) -> tuple["_Document", "_Blob"]:
+def build_document(path, surfaces, options: WriteOptions) -> tuple["_Document", "_Blob"]:
     """The glTF document (without its buffer) and the binary blob of every surface, described
     (every check made, every accessor's bounds known) but not yet computed: ``_Blob.write_to``
     computes and writes it a block of vertices at a time."""
-    scale = check_arguments(path, surfaces, up, meters_per_unit)
+    up, quantize = options.up, options.gltf.quantize
+    scale = check_arguments(path, surfaces, up, options.meters_per_unit)
     layouts = []
     for mesh, material in surfaces:
         check_shapes(mesh, path)
         check_material(mesh, material, path)
         check_channels(mesh, path)
-        layouts.append(_Layout(mesh, tangents, quantize))
+        layouts.append(_Layout(mesh, options.gltf.tangents, quantize))
 
     doc = _Document(
-        asset={"extras": {"source_units": source_units, "meters_per_unit": scale, "source_up": up},
+        asset={"extras": {"source_units": options.source_units, "meters_per_unit": scale, "source_up": up},
                "generator": f"cgamesh {__version__}", "version": "2.0"},
         scenes=[{"nodes": list(range(len(surfaces)))}],
     )

@@ -30,6 +30,7 @@ import numpy as np
 from cgamesh.errors import ExportError
 from cgamesh.export.atomic import atomic_files, atomic_write
 from cgamesh.export.checks import check_surfaces
+from cgamesh.export.options import WriteOptions
 from cgamesh.material import Material
 from cgamesh.meshing.colors import linear_to_srgb
 from cgamesh.meshing.mesh import SurfaceMesh
@@ -41,23 +42,18 @@ _INDEX = re.compile(rb"\d+")
 def write_mesh_format(
     path: str | os.PathLike[str],
     surfaces: Sequence[tuple[SurfaceMesh, Material]],
-    *,
-    up: str,
-    meters_per_unit: float,
-    source_units: str,
-    tangents: bool = False,
-    quantize: bool = False,
+    options: WriteOptions,
 ) -> int:
     """Write every surface to the .obj, .ply or .stl file at ``path``; returns the bytes written.
 
-    ``up``, ``meters_per_unit`` and ``source_units`` are checked but, having no place in these
-    formats, not applied; ``tangents`` and ``quantize`` are glTF options and are ignored.
+    The up axis and unit of ``options`` are checked but, having no place in these formats, not
+    applied.
     """
     target = Path(path)
     suffix = target.suffix.lower()
     if suffix not in SUFFIXES:
         raise ExportError(f"cannot export {path}: expected one of {', '.join(SUFFIXES)}, got {suffix!r}")
-    check_surfaces(path, surfaces, up, meters_per_unit)  # the values are checked, not rescaled
+    check_surfaces(path, surfaces, options.up, options.meters_per_unit)  # the values are checked, not rescaled
     from cgamesh.optional import require
 
     trimesh = require("trimesh", "formats", f"{suffix} export")

@@ -4,9 +4,10 @@ Each entry names the module and function that write the format; the module is im
 when a file of that format is written, so no format library is loaded for another format
 (pxr for USD, trimesh for OBJ / PLY / STL). Every writer has the signature
 
-    write(path, surfaces, *, up, meters_per_unit, source_units, tangents=False, quantize=False) -> int
+    write(path, surfaces, options: WriteOptions) -> int
 
-and returns the bytes written.
+and returns the bytes written; ``options`` (cgamesh.export.options) holds the frame and unit
+every format needs and each format's own part, read only by that format's writer.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cgamesh.errors import InvalidInputError
+from cgamesh.export.options import WriteOptions
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
 
@@ -94,10 +96,9 @@ def check_distinct(outputs: Sequence[str | os.PathLike[str]], report: str | os.P
         claim(Path(report), f"--report {report}")
 
 
-def write(path: str | os.PathLike[str], surfaces: Sequence[tuple[SurfaceMesh, Material]], *, up: str,
-          meters_per_unit: float, source_units: str, tangents: bool = False, quantize: bool = False) -> int:
+def write(path: str | os.PathLike[str], surfaces: Sequence[tuple[SurfaceMesh, Material]],
+          options: WriteOptions) -> int:
     """Write ``surfaces`` in the format of ``path``'s extension; returns the bytes written."""
     writer = writer_for(path)
     function = getattr(importlib.import_module(writer.module), writer.function)
-    return function(path, surfaces, up=up, meters_per_unit=meters_per_unit, source_units=source_units,
-                    tangents=tangents, quantize=quantize)
+    return function(path, surfaces, options)

@@ -43,6 +43,7 @@ import numpy as np
 from cgamesh.errors import ExportError
 from cgamesh.export.atomic import atomic_path, atomic_write
 from cgamesh.export.checks import Measured, check_surfaces
+from cgamesh.export.options import WriteOptions
 from cgamesh.export.usdz import PackageTooLargeError, write_package
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
@@ -60,17 +61,12 @@ RESERVED_PRIMVARS = ("normals", "st", "displayColor", "displayOpacity")
 def write_usd(
     path: str | os.PathLike[str],
     surfaces: Sequence[tuple[SurfaceMesh, Material]],
-    *,
-    up: str,
-    meters_per_unit: float,
-    source_units: str,
-    tangents: bool = False,
-    quantize: bool = False,
+    options: WriteOptions,
 ) -> int:
     """Write every (mesh, material) pair into one USD file at ``path``; returns its size in bytes.
 
-    The format follows the suffix (.usda, .usdc, .usd, .usdz). ``tangents`` and ``quantize``
-    are glTF options and are ignored here. Raises ExportError (leaving any existing file
+    The format follows the suffix (.usda, .usdc, .usd, .usdz); of ``options`` it reads the
+    shared part (up axis, unit). Raises ExportError (leaving any existing file
     untouched) for inconsistent meshes or a file that cannot be written, and
     MissingDependencyError when usd-core is not installed.
     """
@@ -78,9 +74,9 @@ def write_usd(
     suffix = target.suffix.lower()
     if suffix not in SUFFIXES:
         raise ExportError(f"cannot export {path}: a USD file ends in one of {', '.join(SUFFIXES)}, got {suffix!r}")
-    scale, measured = check_surfaces(path, surfaces, up, meters_per_unit)
+    scale, measured = check_surfaces(path, surfaces, options.up, options.meters_per_unit)
     pxr = _pxr()
-    stage = build_stage(pxr, surfaces, up=up, meters_per_unit=scale, source_units=source_units,
+    stage = build_stage(pxr, surfaces, up=options.up, meters_per_unit=scale, source_units=options.source_units,
                         root=_root_name(pxr, target), y_up=suffix == ".usdz", measured=measured,
                         arkit=suffix == ".usdz")
     layer = stage.GetRootLayer()

@@ -4,6 +4,8 @@ Scene files become a ``Scene`` of surface specs; real data (skeletons, tractogra
 becomes ``Centerlines``. Nothing downstream re-checks them; geometry/ and meshing/ never import
 this package.
 
+    formats.py          the table of input formats: suffix or content probe -> reader, kind, default unit; register
+    units.py            the length units a reader may name
     scene.py            the careful scene reader: load_scene, parse_scene, located errors
     scene_fast.py       its fast path over plain data (same Scene, or it steps aside)
     scene_subset.py     the YAML subset scene files are written in, read as JSON (the fast path's first pass)

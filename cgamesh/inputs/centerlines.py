@@ -3,8 +3,9 @@
 A file becomes a ``Centerlines``: points with optional radii, either a tree (``parents``, -1 for
 a root, several roots allowed) or separate polylines (``offsets``), per-point scalars by name,
 the file's length unit and, for messages, where each point came from. The readers
-(swc.py, streamlines.py, arrays.py) validate every record; what is built from a Centerlines
-(cgamesh.centerline_pipeline) may assume its arrays are finite and consistent.
+(swc.py, streamlines.py, arrays.py; which one reads a file: the table in formats.py) validate
+every record; what is built from a Centerlines (cgamesh.pipelines.centerlines) may assume its
+arrays are finite and consistent.
 """
 
 from __future__ import annotations
@@ -13,8 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-# Length units of real-data inputs, in metres.
-METERS_PER_UNIT = {"nm": 1e-9, "um": 1e-6, "mm": 1e-3, "cm": 1e-2, "m": 1.0}
+from cgamesh.inputs import formats
+from cgamesh.inputs.units import METERS_PER_UNIT
 
 
 @dataclass(frozen=True)
@@ -78,35 +79,12 @@ def readonly(array: np.ndarray) -> np.ndarray:
     return array
 
 
-# Centreline file kinds by extension: (reader module, function, the format's own length unit).
-CENTERLINE_FORMATS = {
-    ".swc": ("cgamesh.inputs.swc", "read_swc", "um"),
-    ".trk": ("cgamesh.inputs.streamlines", "read_streamlines", "mm"),
-    ".tck": ("cgamesh.inputs.streamlines", "read_streamlines", "mm"),
-    ".trx": ("cgamesh.inputs.streamlines", "read_streamlines", "mm"),
-    ".npz": ("cgamesh.inputs.arrays", "read_npz", "m"),
-}
-
-
 def is_centerline_file(path) -> bool:
-    """Whether ``path``'s extension (case-insensitive) names a centreline format."""
-    import os
-
-    return os.path.splitext(os.fspath(path))[1].lower() in CENTERLINE_FORMATS
+    """Whether ``path`` is of a centreline format of the input table (cgamesh.inputs.formats)."""
+    found = formats.find(path)
+    return found is not None and found.kind is formats.InputKind.CENTERLINES
 
 
 def read_centerlines(path, units: str | None = None) -> Centerlines:
-    """Any centreline file by its extension; ``units`` overrides the format's own unit."""
-    import importlib
-    import os
-
-    from cgamesh.errors import InvalidInputError
-
-    suffix = os.path.splitext(os.fspath(path))[1].lower()
-    if suffix not in CENTERLINE_FORMATS:
-        raise InvalidInputError(f"{os.fspath(path)}: unknown input format {suffix or '(no extension)'!r}; expected "
-                                f"a scene file (.yaml, .yml) or one of {', '.join(CENTERLINE_FORMATS)}")
-    if units is not None and units not in METERS_PER_UNIT:
-        raise InvalidInputError(f"units must be one of {', '.join(METERS_PER_UNIT)}, got {units!r}")
-    module, function, default = CENTERLINE_FORMATS[suffix]
-    return getattr(importlib.import_module(module), function)(path, units=units or default)
+    """Any centreline file, by its format in the input table; ``units`` overrides the format's own unit."""
+    return formats.read_centerlines(path, units)

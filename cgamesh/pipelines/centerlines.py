@@ -25,11 +25,13 @@ import numpy as np
 
 from cgamesh.errors import DegenerateGeometryError, InvalidInputError
 from cgamesh.inputs.centerlines import Centerlines
+from cgamesh.inputs.formats import InputKind
 from cgamesh.material import Material
 from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.options import BY_NAME as OPTION_TABLE, COLOR_MODES  # the table the options come from
 from cgamesh.pipelines.chains import Chain, ChainList, split_chains, take_chain
 from cgamesh.pipelines.spheres import SOMA_SEGMENT, sphere_meshes
-from cgamesh.pipelines.tube_options import COLOR_MODES, UP_AXES, TubeOptions
+from cgamesh.pipelines.tube_options import TubeOptions
 from cgamesh.pipelines.tubes import finish_tube, label_name, tube_spec
 
 SOMA = 1  # SWC structure type
@@ -160,17 +162,13 @@ def chain_count(lines: Centerlines) -> int:
 
 
 def _check_options(lines: Centerlines, options: TubeOptions) -> None:
+    """The checks of the option table (cgamesh.options) on every value (a TubeOptions may be
+    made without the table), and a colouring that names a field of this file."""
     where = lines.source
-    if options.up not in UP_AXES:
-        raise InvalidInputError(f"up must be one of {', '.join(UP_AXES)}, got {options.up!r}")
-    if options.around < 3:
-        raise InvalidInputError(f"around must be >= 3, got {options.around}")
-    if options.subdivide < 0:
-        raise InvalidInputError(f"subdivide must be >= 0, got {options.subdivide}")
-    for key in ("radius", "min_radius", "tolerance"):
+    for key in ("up", "around", "subdivide", "radius", "min_radius", "tolerance"):
         value = getattr(options, key)
-        if value is not None and not (np.isfinite(value) and value > 0.0):
-            raise InvalidInputError(f"{key} must be a finite number > 0, got {value}")
+        if value is not None:
+            OPTION_TABLE[key].value_for(InputKind.CENTERLINES).check(key, value)
     if options.color_by not in COLOR_MODES and options.color_by not in lines.scalars:
         fields = ", ".join(lines.scalars) or "none"
         raise InvalidInputError(f"{where}: color-by must be one of {', '.join(COLOR_MODES)} or a per-point "

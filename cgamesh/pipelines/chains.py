@@ -16,6 +16,7 @@ import numpy as np
 
 from cgamesh.errors import CgameshError
 from cgamesh.inputs.centerlines import Centerlines
+from cgamesh.inputs.scene import Location
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.pipelines.tube_options import TubeOptions
 
@@ -63,6 +64,11 @@ class ChainList:
 
     def __iter__(self):
         return (self[i] for i in range(len(self)))
+
+    def location(self, i: int) -> Location:
+        """Chain i's place in its file, as its messages name it."""
+        chain = self[i]
+        return Location(self.lines.source, chain.line, chain.label)
 
 
 def split_chains(lines: Centerlines) -> tuple[ChainList, np.ndarray]:

@@ -36,11 +36,17 @@ FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 @dataclass(frozen=True)
 class Resolution:
-    """Overrides of every surface's resolution or tolerance from the command line (None keeps the file's)."""
+    """Overrides of every surface's resolution or tolerance from the command line (None keeps the
+    file's); ``from_options`` builds one from the table of options (cgamesh.options)."""
 
     around: int | None = None
     along: int | None = None
     tolerance: float | None = None
+
+    @classmethod
+    def from_options(cls, values) -> Resolution:
+        """The resolution of ``values`` (a mapping by the table's names; None or absent: the file's)."""
+        return cls(values.get("around"), values.get("along"), values.get("tolerance"))
 
 
 def mesh_surface(spec: SurfaceSpec, resolution: Resolution = Resolution(), tangents: bool = False,

@@ -4,13 +4,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-UP_AXES = ("x", "y", "z")
-COLOR_MODES = ("none", "radius", "direction", "segment")  # or the name of a per-point scalar
+from cgamesh.inputs.formats import InputKind
+from cgamesh.options import for_input
 
 
 @dataclass(frozen=True)
 class TubeOptions:
-    """How centrelines become tubes (the command line's real-data options).
+    """How centrelines become tubes (the command line's real-data options), as the centreline
+    pipeline receives them; ``from_options`` builds one from the table of options (cgamesh.options),
+    whose defaults are these.
 
     radius:     a constant radius for every node (required when the input has no radii; it
                 replaces the file's radii when given).
@@ -37,3 +39,10 @@ class TubeOptions:
     watertight: bool = False
     strict: bool = False
     caps: bool = False
+
+    @classmethod
+    def from_options(cls, values) -> "TubeOptions":
+        """The options of ``values`` (a mapping by the table's names) that a centreline input
+        takes and were given; the defaults for the others. ``units`` is the reader's, not ours."""
+        return cls(**{name: value for name, value in for_input(values, InputKind.CENTERLINES).items()
+                      if name != "units"})

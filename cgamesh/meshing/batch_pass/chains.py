@@ -32,7 +32,7 @@ SOMA_SEGMENT = -1.0
 
 
 def _segment_tangents(p: np.ndarray, first: np.ndarray, count: np.ndarray) -> np.ndarray:
-    """``centerline_pipeline.node_tangents`` of every chain (p concatenated, >= 2 points each)."""
+    """``pipelines.tubes.node_tangents`` of every chain (p concatenated, >= 2 points each)."""
     n = len(p)
     index = np.arange(n)
     chain_first = np.repeat(first, count)
@@ -54,7 +54,7 @@ def _segment_tangents(p: np.ndarray, first: np.ndarray, count: np.ndarray) -> np
 
 def _outside_radii(node_radii: np.ndarray, inside: np.ndarray, chain_first: np.ndarray,
                    chain_last: np.ndarray) -> np.ndarray:
-    """The radii ``centerline_pipeline._tube`` gives a chain's nodes (concatenated, before
+    """The radii ``pipelines.tubes.tube_spec`` gives a chain's nodes (concatenated, before
     duplicates merge) when some lie inside the soma: each node inside takes the radius of the
     nearest node of its chain outside (the earlier of two as near, as argmin picks), so a
     neurite leaving the soma starts with its own radius. ``inside``: nodes to replace, only of
@@ -127,13 +127,13 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
     meshed = meshable.copy()
     for chunk in np.split(np.arange(total), bounds) if total else []:
         members = chunk[meshable[chunk]]
-        errors = {int(index): DegenerateGeometryError(f"{_where(chains, index)}: expected at least two distinct "
+        errors = {int(index): DegenerateGeometryError(f"{chains.location(index)}: expected at least two distinct "
                                                       f"points, got {kept_counts[index]}")
                   for index in chunk[~meshable[chunk] & ~soma_only[chunk]]}
         batched_meshes: dict[int, SurfaceMesh] = {}
         if len(members):
             result = _mesh_chunk(members, m_first, m_count, m_p, m_t, m_r, options, stem)
-            errors.update({int(members[k]): type(error)(f"{_where(chains, members[k])}: {error}")
+            errors.update({int(members[k]): type(error)(f"{chains.location(members[k])}: {error}")
                            for k, error in result.errors.items()})
             batched_meshes = _chain_meshes(members, result, m_first, m_count, m_p, m_r, m_t, scalar, m_nodes,
                                            chains, options, stem, label_name)
@@ -150,14 +150,6 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
             sink(batched_meshes[key])
     _junction_events(meshed, m_first, m_count, m_nodes, m_t, tangents, segment_of)
     return [line for _, line in sorted(skipped)]
-
-
-def _where(chains, index) -> str:
-    """A chain's place in its file, as its messages name it."""
-    from cgamesh.inputs.scene import Location
-
-    chain = chains[int(index)]
-    return str(Location(chains.lines.source, chain.line, chain.label))
 
 
 def _mesh_chunk(members, first, count, p, t, r, options, stem: str) -> TubeArrays:
