@@ -1,13 +1,8 @@
-"""The batched meshing pass: every chain of a centreline input meshed as one set of arrays.
+"""Centreline chains read as rows of rings of the one circle mesher, chunk by chunk.
 
-The per-chain path (cgamesh.pipeline.mesh_surface on one motor SurfaceSpec per chain) pays
-Python-level work per chain and per control. This pass computes the same surfaces for all
-chains at once: the splined similarity motions of every span of every chain as arrays
-(``motions``), every ring's circle, frame, normals, UVs and faces (``rings``), and the
-centreline bookkeeping around them: node tangents, attributes, colours, junction events,
-assembly into the merged or split output (``chains``), chains leaving the soma among them
-(with the per-chain path's radii). A chain whose surface needs one of the
-per-chain mesher's rare repairs (a stationary ring, a fold of the normal field, a vanishing
-normal, an uncertain outward direction, a normal spline not certified away from zero) is
-handed to the per-chain path, so the output is that path's in every case.
+The splined similarity motions of every span of every chain as arrays (``motions``), their
+circles read out blade-major (``circle_rows``), every chain's rings as rows of
+cgamesh.meshing.circles.mesh_rings (``rings``), and the centreline bookkeeping around them: node
+tangents, soma radii, attributes, colours, junction events, assembly into the merged or split
+output and the chains that are skipped with their errors (``chains``).
 """
