@@ -1,0 +1,82 @@
+"""One timed run of ``bench_trees.py``, in a fresh process running one tree's code.
+
+    python bench_trees_child.py TREE_ROOT kb-tube SCENE SIZE OUT.glb
+    python bench_trees_child.py TREE_ROOT scene SCENE WARMUP_SCENE
+    python bench_trees_child.py TREE_ROOT command ARG...
+
+- ``kb-tube`` (bench_tubes.py): after a warm-up mesh at 16 x 16 (caches of product term lists),
+  ``mesh_scene`` of the scene at SIZE x SIZE, then writing it as a GLB (``export.registry.write``).
+- ``scene`` (bench_scene_batch.py): after meshing WARMUP_SCENE (a few surfaces of the same
+  kind), ``mesh_scene`` of SCENE, read beforehand (reading is not timed).
+- ``command`` (bench_realdata.py): ``cgamesh_cli.main.main(ARG...)``; the parent times the
+  whole process.
+
+Answers (trees.answer) the CPU and wall seconds of each timed part, the vertex count and its
+own peak resident memory. Uses only ``cgamesh.inputs.scene.load_scene``,
+``cgamesh.pipeline.Resolution`` / ``mesh_scene`` (without ``batched=``, which goes away),
+``cgamesh.export.registry.write`` and ``cgamesh_cli.main.main``, all in f8376ab and after it.
+"""
+
+from __future__ import annotations
+
+import gc
+import sys
+import time
+
+from trees import answer, check_imports, peak_kb
+
+
+def timed(work) -> tuple[dict, object]:
+    """({"cpu": s, "wall": s}, result) of one call of ``work``, nothing of earlier work in the way."""
+    gc.collect()
+    cpu, wall = time.process_time(), time.perf_counter()
+    result = work()
+    return {"cpu": time.process_time() - cpu, "wall": time.perf_counter() - wall}, result
+
+
+def vertices(meshes) -> int:
+    return sum(mesh.vertex_count for mesh, _ in meshes)
+
+
+def kb_tube(path: str, size: str, out: str) -> dict:
+    from cgamesh.export.registry import write
+    from cgamesh.inputs.scene import load_scene
+    from cgamesh.pipeline import Resolution, mesh_scene
+
+    n = int(size)
+    scene = load_scene(path, rendering=False)
+    mesh_scene(scene, Resolution(16, 16))
+    mesh_time, meshes = timed(lambda: mesh_scene(scene, Resolution(n, n)))
+    write_time, _ = timed(lambda: write(out, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit,
+                                        source_units=scene.units))
+    return {"mesh": mesh_time, "GLB write": write_time, "vertices": vertices(meshes)}
+
+
+def scene_batch(path: str, warmup: str) -> dict:
+    from cgamesh.inputs.scene import load_scene
+    from cgamesh.pipeline import mesh_scene
+
+    mesh_scene(load_scene(warmup, rendering=False))
+    scene = load_scene(path, rendering=False)
+    mesh_time, meshes = timed(lambda: mesh_scene(scene))
+    return {"mesh": mesh_time, "vertices": vertices(meshes)}
+
+
+def command(argv: list[str]) -> dict:
+    from cgamesh_cli.main import main
+
+    status = main(argv)
+    if status not in (0, 3):  # 3: segments skipped, as bench_realdata.py allows
+        raise SystemExit(f"cgamesh {' '.join(argv)} exited with status {status}")
+    return {}
+
+
+def main() -> None:
+    root, case, args = sys.argv[1], sys.argv[2], sys.argv[3:]
+    check_imports(root)
+    result = {"kb-tube": lambda: kb_tube(*args), "scene": lambda: scene_batch(*args), "command": lambda: command(args)}[case]()
+    answer({**result, "peak_kb": peak_kb()})
+
+
+if __name__ == "__main__":
+    main()
