@@ -161,3 +161,6 @@ if __name__ == "__main__":
     except TreeError as error:
         print(f"bench_trees: error: {error}", file=sys.stderr)
         sys.exit(2)
+    except KeyboardInterrupt:
+        print("bench_trees: interrupted", file=sys.stderr)
+        sys.exit(130)

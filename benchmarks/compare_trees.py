@@ -392,9 +392,12 @@ def main(argv: list[str] | None = None) -> int:
                 print_row(job.name, outcome, time.perf_counter() - began, width)
                 if not outcome.passed:
                     failures.append(job.name)
-        finally:
+        except BaseException:
             for worker in workers.values():
-                worker.close()
+                worker.close(kill=True)
+            raise
+        for worker in workers.values():
+            worker.close()
     minutes = (time.perf_counter() - start) / 60.0
     if failures:
         print(f"{len(failures)} of {len(jobs)} jobs DIFFER ({minutes:.1f} min): {', '.join(failures[:10])}"
@@ -410,3 +413,6 @@ if __name__ == "__main__":
     except TreeError as error:
         print(f"compare_trees: error: {error}", file=sys.stderr)
         sys.exit(2)
+    except KeyboardInterrupt:
+        print("compare_trees: interrupted", file=sys.stderr)
+        sys.exit(130)

@@ -199,7 +199,12 @@ def run_once(tree: Tree, argv: list[str], cwd: Path | None = None, env: dict | N
     with tempfile.TemporaryFile() as errors:  # a file, not a pipe: nothing to drain while it runs
         child = subprocess.Popen([sys.executable, *argv], stdout=subprocess.PIPE, stderr=errors,
                                  env=environment, cwd=cwd or HERE)
-        output = child.stdout.read().decode()
+        try:
+            output = child.stdout.read().decode()
+        except BaseException:  # an interrupt: no child left behind
+            child.kill()
+            child.wait()
+            raise
         child.stdout.close()
         _, status, usage = os.wait4(child.pid, 0)
         wall = time.perf_counter() - start
@@ -261,9 +266,13 @@ class Worker:
         self.log.seek(0, os.SEEK_END)
         return text[-size:]
 
-    def close(self) -> None:
+    def close(self, kill: bool = False) -> None:
+        """End the child: after its current job, or at once with ``kill`` (an interrupt)."""
         if self.child is not None and self.child.poll() is None:
-            self.child.stdin.close()
+            if kill:
+                self.child.kill()
+            with contextlib.suppress(BrokenPipeError):
+                self.child.stdin.close()
             try:
                 self.child.wait(timeout=30)
             except subprocess.TimeoutExpired:
