@@ -4,7 +4,8 @@
     python bench_trees_child.py TREE_ROOT scene SCENE WARMUP_SCENE
     python bench_trees_child.py TREE_ROOT command ARG...
 
-- ``kb-tube`` (bench_tubes.py): after a warm-up mesh at 16 x 16 (caches of product term lists),
+- ``kb-tube`` (bench_tubes.py): after a warm-up mesh at 256 x 256 (caches of product term lists;
+  f8376ab meshes a surface that large alone, as it meshes 1024 x 1024, not in its batched pass),
   ``mesh_scene`` of the scene at SIZE x SIZE, then writing it as a GLB (``export.registry.write``).
 - ``scene`` (bench_scene_batch.py): after meshing WARMUP_SCENE (a few surfaces of the same
   kind), ``mesh_scene`` of SCENE, read beforehand (reading is not timed).
@@ -45,7 +46,7 @@ def kb_tube(path: str, size: str, out: str) -> dict:
 
     n = int(size)
     scene = load_scene(path, rendering=False)
-    mesh_scene(scene, Resolution(16, 16))
+    mesh_scene(scene, Resolution(256, 256))
     mesh_time, meshes = timed(lambda: mesh_scene(scene, Resolution(n, n)))
     write_time, _ = timed(lambda: write(out, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit,
                                         source_units=scene.units))

@@ -232,12 +232,19 @@ def compare_arrays(base: Path, head: Path, limit=lambda name: LIMIT, relative_bo
                 notes.append(f"{name} {a.dtype}->{b.dtype}")
             gap = difference(name, a, b, relative_box)
             failed = failed or gap > limit(name)
-            if gap > worst or (gap == worst and gap > 0 and not where):
+            if gap > worst:
                 worst, where = gap, name
     if failed:
         return Outcome(False, f"DIFFERENT (worst {where})", worst, where)
     text = "identical" if worst == 0.0 else f"within {LIMIT:g}"
     return Outcome(True, text + (f"; dtypes {', '.join(notes[:3])}" if notes else ""), worst, where)
+
+
+def same_surface(a: dict, b: dict) -> bool:
+    """Name, flags and material equal; the a priori bound of a tolerance mesh (a float) within LIMIT."""
+    x, y = a.get("max_deviation"), b.get("max_deviation")
+    close = x == y or (x is not None and y is not None and abs(x - y) <= LIMIT * abs(x))
+    return close and {**a, "max_deviation": 0} == {**b, "max_deviation": 0}
 
 
 def compare_answers(base: dict, head: dict) -> Outcome | None:
@@ -250,7 +257,12 @@ def compare_answers(base: dict, head: dict) -> Outcome | None:
             return Outcome(True, "same refusal: " + re.sub(r"/\S*/", "", base["error"])[:60])
         return Outcome(False, f"base {base.get('error', 'meshed')[:70]!r} / head {head.get('error', 'meshed')[:70]!r}",
                        np.inf)
-    for key in ("status", "stderr", "surfaces", "up", "units", "meters_per_unit", "skipped"):
+    if len(base.get("surfaces", [])) != len(head.get("surfaces", [])):
+        return Outcome(False, f"{len(base['surfaces'])} surfaces in base, {len(head['surfaces'])} in head", np.inf)
+    for a, b in zip(base.get("surfaces", []), head.get("surfaces", [])):
+        if not same_surface(a, b):
+            return Outcome(False, f"surface {a['name']!r} differs: base {a} / head {b}", np.inf)
+    for key in ("status", "stderr", "up", "units", "meters_per_unit", "skipped"):
         if base.get(key) != head.get(key):
             return Outcome(False, f"{key} differs: base {str(base.get(key))[:60]!r} / head {str(head.get(key))[:60]!r}",
                            np.inf)
