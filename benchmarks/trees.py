@@ -182,13 +182,18 @@ def open_trees(base: str, head: str | None = None):
 
 @dataclass(frozen=True)
 class Run:
-    """One child process: wall seconds (as the parent saw it), CPU seconds (user + system, its
+    """One child process: wall seconds (as the parent saw it), user and system CPU seconds (its
     rusage), peak resident MiB (its own report, 0 if it gave none) and its RESULT (or None)."""
 
     wall: float
-    cpu: float
+    user: float
+    system: float
     peak_mb: float
     result: dict | None
+
+    @property
+    def cpu(self) -> float:
+        return self.user + self.system
 
 
 def run_once(tree: Tree, argv: list[str], cwd: Path | None = None, env: dict | None = None) -> Run:
@@ -217,7 +222,7 @@ def run_once(tree: Tree, argv: list[str], cwd: Path | None = None, env: dict | N
     results = [json.loads(line[len(RESULT):]) for line in output.splitlines() if line.startswith(RESULT)]
     result = results[-1] if results else None
     peak = result.get("peak_kb", 0) / 1024.0 if result else 0.0
-    return Run(wall, usage.ru_utime + usage.ru_stime, peak, result)
+    return Run(wall, usage.ru_utime, usage.ru_stime, peak, result)
 
 
 class Worker:
