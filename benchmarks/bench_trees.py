@@ -6,8 +6,9 @@
 working tree (trees.py checks a revision out into a temporary git worktree). Cases, each timed
 in a fresh child process (bench_trees_child.py) running one tree's code:
 
-- bench_tubes.py: the KB tube example meshed at 1024 x 1024 in process (``mesh_scene``, after a
-  warm-up mesh), and that mesh written as a GLB;
+- bench_tubes.py: the KB tube example meshed at 1024 x 1024 in process (``mesh_scene``, after
+  warm-up meshes), and that mesh written as a GLB, each the median of 5 calls in the child
+  (a call takes 0.05 to 0.1 s);
 - bench_scene_batch.py: its scene of 2,000 catmull_rom tubes of 4 circles (written by the base
   tree's own benchmark helpers; read before the clock starts) meshed by ``mesh_scene``;
 - bench_realdata.py: the three smallest navis neurons (--radius 40) and dipy's fornix
