@@ -64,24 +64,48 @@ def vertices(meshes) -> int:
     return sum(mesh.vertex_count for mesh, _ in meshes)
 
 
-def kb_tube(path: str, size: str, out: str) -> dict:
+def scene_pipeline():
+    """The scene pipeline's module, under its name in this tree (it moved from cgamesh.pipeline)."""
+    try:
+        from cgamesh.pipelines import scene
+    except ImportError:  # the tree before the move
+        from cgamesh import pipeline as scene
+    return scene
+
+
+def writer(scene):
+    """``write(path, meshes)`` with the scene's up axis and units, as this tree's writers take them
+    (one WriteOptions value, or the keywords before it)."""
     from cgamesh.export.registry import write
+
+    try:
+        from cgamesh.export.options import WriteOptions
+    except ImportError:  # the tree before WriteOptions
+        return lambda path, meshes: write(path, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit,
+                                          source_units=scene.units)
+    options = WriteOptions(up=scene.up, meters_per_unit=scene.meters_per_unit, source_units=scene.units)
+    return lambda path, meshes: write(path, meshes, options)
+
+
+def kb_tube(path: str, size: str, out: str) -> dict:
     from cgamesh.inputs.scene import load_scene
-    from cgamesh.pipeline import Resolution, mesh_scene
+
+    Resolution, mesh_scene = scene_pipeline().Resolution, scene_pipeline().mesh_scene
 
     n = int(size)
     scene = load_scene(path, rendering=False)
     mesh_scene(scene, Resolution(256, 256))
     mesh_scene(scene, Resolution(n, n))  # dropped: see the docstring (the kernel's pages, not the code)
     mesh_time, meshes = timed_median(lambda: mesh_scene(scene, Resolution(n, n)), INNER)
-    write_time, _ = timed_median(lambda: write(out, meshes, up=scene.up, meters_per_unit=scene.meters_per_unit,
-                                               source_units=scene.units), INNER)
+    write = writer(scene)
+    write_time, _ = timed_median(lambda: write(out, meshes), INNER)
     return {"mesh": mesh_time, "GLB write": write_time, "vertices": vertices(meshes)}
 
 
 def scene_batch(path: str, warmup: str) -> dict:
     from cgamesh.inputs.scene import load_scene
-    from cgamesh.pipeline import mesh_scene
+
+    mesh_scene = scene_pipeline().mesh_scene
 
     mesh_scene(load_scene(warmup, rendering=False))
     scene = load_scene(path, rendering=False)

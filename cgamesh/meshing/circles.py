@@ -329,10 +329,12 @@ def _along(samples: np.ndarray, radius: np.ndarray, layout: SurfaceRows) -> tupl
     circumference averaged along each surface and its length (``uv.mean_along``)."""
     steps = np.linalg.norm(np.diff(samples, axis=0), axis=-1).mean(axis=-1)  # ring r to r + 1
     travelled = np.zeros(len(radius))
-    v = np.zeros(len(radius))
-    lengths = np.zeros((len(layout.count), 2))
     girth = 2.0 * np.pi * radius
-    # row-wise sums: numpy's pairwise sum depends on a row's length, so rows of one length at a time
+    surfaces = len(layout.count)
+    length = np.zeros(surfaces)
+    around_sum = np.zeros(surfaces)
+    # running sums along each surface, and the trapezoid sums: numpy's pairwise sum depends on a
+    # row's length, so rows of one length at a time
     for members, grid, valid in padded_rows(layout.first, layout.count):
         step_rows = np.where(valid[:, 1:], steps[np.maximum(grid[:, 1:], 1) - 1], 0.0)
         cumulative = np.concatenate([np.zeros((len(members), 1)), np.cumsum(step_rows, axis=1)], axis=1)
@@ -340,16 +342,17 @@ def _along(samples: np.ndarray, radius: np.ndarray, layout: SurfaceRows) -> tupl
         present = np.flatnonzero(np.bincount(layout.count[members]))
         for width in present[present > 0]:  # the lengths present, ascending (a surface may have none left)
             same = np.flatnonzero(layout.count[members] == width)
-            rows, run = grid[same, :width], cumulative[same, :width]
-            last = run[:, -1]
-            moving = last > 0.0
-            safe = np.where(moving, last, 1.0)
-            c = girth[rows]
-            around_mean = np.sum(0.5 * (c[:, 1:] + c[:, :-1]) * np.diff(run, axis=1), axis=1) / safe
-            lengths[members[same], 0] = np.where(moving, around_mean, c.mean(axis=1))
-            lengths[members[same], 1] = np.where(moving, last, lengths[members[same], 0])
-            v[rows] = np.where(moving[:, None], run / safe[:, None], np.linspace(0.0, 1.0, width)[None, :])
-    return v, lengths
+            run, c = cumulative[same, :width], girth[grid[same, :width]]
+            length[members[same]] = run[:, -1]
+            around_sum[members[same]] = np.sum(0.5 * (c[:, 1:] + c[:, :-1]) * np.diff(run, axis=1), axis=1)
+    moving = length > 0.0
+    v = travelled / np.where(moving, length, 1.0)[layout.surface]
+    circumference = around_sum / np.where(moving, length, 1.0)
+    for s in np.flatnonzero(~moving & (layout.count > 0)):  # rings that do not move: evenly spaced
+        rows = slice(layout.first[s], layout.first[s] + layout.count[s])
+        v[rows] = np.linspace(0.0, 1.0, layout.count[s])
+        circumference[s] = np.mean(girth[rows])
+    return v, np.stack([circumference, np.where(moving, length, circumference)], axis=1)
 
 
 def _line_error(t: float, end: float) -> DegenerateGeometryError:

@@ -13,6 +13,7 @@ of a surface is then turned outward: the sum over its vertices of n . (x - centr
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -141,8 +142,9 @@ class RingSigns:
         signs[examined] = self.vertex[row_of[rows[examined]]] * self.ring[rows[examined], None]
         return signs
 
-    @property
+    @cached_property
     def row_of(self) -> np.ndarray:
+        """(R,) each ring's row of ``vertex``, -1 for rings not examined."""
         row_of = np.full(len(self.ring), -1)
         row_of[self.examined] = np.arange(len(self.examined))
         return row_of
@@ -230,9 +232,14 @@ def outward_flips(field: RingNormals, signs: RingSigns, rings: RingRows, layout:
     if not trusted.all():
         rows = np.flatnonzero(~trusted[surface])
         outward = np.einsum("kmi,kmi->km", normals[rows], positions[rows] - rings.centre[rows, None, :])
-        outward *= signs.at(rows, positions.shape[1])
-        summed = np.bincount(surface[rows], weights=outward.sum(axis=1), minlength=surfaces)
-        total = np.where(trusted, estimate, summed)
+        # a ring of one sign sums its vertices first; an examined ring's vertices take their own signs
+        row_of = signs.row_of[rows]
+        examined = row_of >= 0
+        summed = outward.sum(axis=1) * signs.ring[rows]
+        if examined.any():
+            summed[examined] = np.einsum("km,km->k", outward[examined],
+                                         signs.vertex[row_of[examined]]) * signs.ring[rows[examined]]
+        total = np.where(trusted, estimate, np.bincount(surface[rows], weights=summed, minlength=surfaces))
         columns = positions.shape[1]
         close = np.flatnonzero(~trusted & (np.abs(total) <= DECISION_MARGIN * threshold * columns))
         for s in close:  # a sign this close to zero: summed as that surface's rows alone sum it

@@ -16,7 +16,7 @@ import numpy as np
 
 from cgamesh.errors import CgameshError
 from cgamesh.inputs.centerlines import Centerlines
-from cgamesh.inputs.scene import Location
+from cgamesh.inputs.scene_specs import Location
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.pipelines.tube_options import TubeOptions
 

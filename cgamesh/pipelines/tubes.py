@@ -22,7 +22,7 @@ from cgamesh.geometry.frame import LocalFrame
 from cgamesh.geometry.motor_surface import MotorSurface
 from cgamesh.geometry.motors import MotionSpline
 from cgamesh.inputs.centerlines import Centerlines
-from cgamesh.inputs.scene import Location
+from cgamesh.inputs.scene_specs import Location
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.node_normals import envelope_normals
 from cgamesh.pipelines.chains import Chain

@@ -77,6 +77,8 @@ def _rows(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, chain: n
 def _lost_planes(motions: ChainMotions, chains: np.ndarray, names) -> dict[int, CgameshError]:
     """The errors of the chains (indices (n,)) whose normal spline comes near zero on the scan
     of a motor surface's check (SCAN_SAMPLES_PER_SEGMENT samples per span)."""
+    if not len(chains):
+        return {}
     spans = motions.nodes.count[chains] - 1
     samples = SCAN_SAMPLES_PER_SEGMENT * spans + 1
     t, which = _linspace_parameters(spans, samples)
