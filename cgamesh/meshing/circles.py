@@ -190,6 +190,9 @@ class _Grid:
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
                 field = field.replace_rings(stationary, nearby_normals(read, u[stationary]))
 
+        # each ring's circle, axes and normal field are let go as soon as what is made from them
+        # is made, before the faces: a chunk of many surfaces then holds little beyond its vertices
+        v_coordinate, self.uv_lengths = _along(field.samples, rings.radius, layout)
         theta = 2.0 * np.pi * np.arange(columns) / around
         circle_basis = np.stack([np.ones_like(theta), np.cos(theta), np.sin(theta)], axis=1)
         placement = np.stack([rings.centre, rings.radius[:, None] * u, rings.radius[:, None] * v], axis=1)
@@ -200,6 +203,15 @@ class _Grid:
                                  np.arange(len(layout.count)))
         self.missing |= signs.missing
         signs = signs.flipped(outward_flips(field, signs, rings, layout, positions, normals), surface)
+        self.caps = {}
+        for s in np.flatnonzero(surfaces.caps & (layout.count > 0)):
+            ends = (layout.first[s], layout.last[s])
+            # Each cap faces away from the tube: against the direction its ring moves in.
+            leaving = np.sign(field.frame[list(ends), 0, 0]) * np.array([-1.0, 1.0])
+            leaving[leaving == 0.0] = np.array([-1.0, 1.0])[leaving == 0.0]
+            self.caps[int(s)] = [(rings.centre[k], rings.normal[k], rings.radius[k], u[k], facing)
+                                 for k, facing in zip(ends, leaving)]
+        del field
         _apply_signs(normals, signs)
         # Tangent along +u: the circle's own tangent n x e_r = d x / d theta. The normal is
         # signs * (n x e_r) x x' / |.|, so (normal x tangent) . d x / d t has the sign of the
@@ -213,6 +225,7 @@ class _Grid:
             tangents[..., 3] = signs.ring[:, None]
             tangents[signs.examined, :, 3] = signs.at(signs.examined, columns)
             tangents[:, -1] = tangents[:, 0]
+        del u, v
         positions[:, -1] = positions[:, 0]
         normals[:, -1] = normals[:, 0]
         loop_first, loop_last = layout.first[closed], layout.last[closed]
@@ -225,11 +238,11 @@ class _Grid:
         # Next to a fold or a pinch point the vertex normals of one triangle may differ widely,
         # and between rings turned far apart the chord need not follow d/dt: such triangles are
         # wound by their own geometry.
-        turning = np.zeros(len(rings), dtype=bool)
+        turning = np.zeros(len(layout.surface), dtype=bool)
         turning[signs.examined] = True
         strip = ((turning[:-1] | turning[1:] | turned_pairs(signs.agreement)) & layout.within)[layout.within]
         if np.any(strip):
-            faces = orient_by_geometry(faces, self.positions, self.normals, np.repeat(strip, 2 * around))
+            orient_by_geometry(faces, self.positions, self.normals, np.repeat(strip, 2 * around), in_place=True)
         if near_zero[0].size:
             count = len(faces)
             faces, kept_faces = drop_zero_area(self.positions, faces, near_zero[0] * columns + near_zero[1],
@@ -240,21 +253,12 @@ class _Grid:
                     np.searchsorted(np.cumsum(face_counts), gone, side="right"), minlength=len(face_counts))
         self.faces = faces
         self.tangents = None if tangents is None else tangents.reshape(-1, 4)
-        self.vertex_first = np.concatenate([layout.first, [len(rings)]]) * columns
+        self.vertex_first = np.concatenate([layout.first, [len(layout.surface)]]) * columns
         self.face_first = np.concatenate([[0], np.cumsum(face_counts)])
-        v_coordinate, self.uv_lengths = _along(field.samples, rings.radius, layout)
         uvs = np.empty(positions.shape[:2] + (2,))
         uvs[..., 0] = np.linspace(0.0, 1.0, columns)[None, :]
         uvs[..., 1] = v_coordinate[:, None]
         self.uvs = uvs.reshape(-1, 2)
-        self.caps = {}
-        for s in np.flatnonzero(surfaces.caps & (layout.count > 0)):
-            ends = (layout.first[s], layout.last[s])
-            # Each cap faces away from the tube: against the direction its ring moves in.
-            leaving = np.sign(field.frame[list(ends), 0, 0]) * np.array([-1.0, 1.0])
-            leaving[leaving == 0.0] = np.array([-1.0, 1.0])[leaving == 0.0]
-            self.caps[int(s)] = [(rings.centre[k], rings.normal[k], rings.radius[k], u[k], facing)
-                                 for k, facing in zip(ends, leaving)]
 
 
 def _apply_signs(normals: np.ndarray, signs: RingSigns) -> None:
@@ -368,8 +372,9 @@ def _line_error(t: float, end: float) -> DegenerateGeometryError:
 
 
 def orient_by_geometry(faces: np.ndarray, positions: np.ndarray, normals: np.ndarray,
-                       which: np.ndarray) -> np.ndarray:
-    """Wind the triangles ``which`` (F,) bool counter-clockwise seen from their vertex normals.
+                       which: np.ndarray, in_place: bool = False) -> np.ndarray:
+    """Wind the triangles ``which`` (F,) bool counter-clockwise seen from their vertex normals
+    (those of a copy of ``faces``, or of ``faces`` itself ``in_place``).
 
     A triangle straddling a fold spans two sheets of the parametrisation, and no vote of its
     vertices' signs tells its winding; its own geometric normal against the sum of its vertex
@@ -386,7 +391,8 @@ def orient_by_geometry(faces: np.ndarray, positions: np.ndarray, normals: np.nda
     summed = normals[picked[:, 0]] + normals[picked[:, 1]] + normals[picked[:, 2]]
     against = np.flatnonzero(np.einsum("ti,ti->t", geometric, summed) < 0.0)
     rows = against if every else chosen[against]
-    faces = faces.copy()
+    if not in_place:
+        faces = faces.copy()
     faces[rows] = faces[rows][:, [0, 2, 1]]
     return faces
 

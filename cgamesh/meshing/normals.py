@@ -127,7 +127,7 @@ def unit_normals(coefficients: np.ndarray, theta: np.ndarray, speed: np.ndarray,
     unit = np.empty((rings, columns, 3))
     smallest = np.empty(rings)
     near_rings, near_columns = [], []
-    block = max(1, _SCRATCH_VALUES // (3 * columns))
+    block = max(1, min(rings, _SCRATCH_VALUES // (3 * columns)))  # no larger than the rings to fill
     planes, squares, scratch = np.empty((3, block, columns)), np.empty((3, block, columns)), np.empty((block, columns))
     for start in range(0, rings, block):
         stop = min(rings, start + block)

@@ -230,8 +230,13 @@ def outward_flips(field: RingNormals, signs: RingSigns, rings: RingRows, layout:
     trusted = per_ring & (np.abs(estimate) >= threshold)
     total = estimate
     if not trusted.all():
-        rows = np.flatnonzero(~trusted[surface])
-        outward = np.einsum("kmi,kmi->km", normals[rows], positions[rows] - rings.centre[rows, None, :])
+        untrusted = ~trusted[surface]
+        if untrusted.all():  # every ring (the usual case where rings are examined): no gathers
+            rows = np.arange(len(surface))
+            outward = np.einsum("kmi,kmi->km", normals, positions - rings.centre[:, None, :])
+        else:
+            rows = np.flatnonzero(untrusted)
+            outward = np.einsum("kmi,kmi->km", normals[rows], positions[rows] - rings.centre[rows, None, :])
         # a ring of one sign sums its vertices first; an examined ring's vertices take their own signs
         row_of = signs.row_of[rows]
         examined = row_of >= 0
