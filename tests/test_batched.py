@@ -3,7 +3,10 @@
 Two kinds of check on every input below. Against the definition of a tube: every node ring is
 the node's circle (centre on the node, the node's radius, a planar ring), every ring between
 two nodes has a radius within theirs (the radius spline is monotone on a span), normals are
-unit, orthogonal to their ring and wound with the triangles; the skipped chains are named.
+unit; on a tube that cannot fold over itself (its radius small against its steps, no sharp
+turn, consecutive rings clear of each other's planes: on the smallest navis neuron 127 of its
+1,289 tubes) every normal is orthogonal to its ring and every triangle wound with its normals;
+the skipped chains are named.
 Invariance: a chain meshed among many gets the mesh it gets alone (every chain its own chunk)
 -- positions, UVs, faces, welds, attributes and the skipped lines bit for bit, normals (and
 the direction colours) within 1e-12 (a few units in the last place, from the order in which
@@ -73,18 +76,35 @@ def assert_true_tubes(lines, options: TubeOptions) -> None:
             assert np.all(radius[:-1, 0] >= low[span] * (1 - 1e-9)) and np.all(radius[:-1, 0] <= high[span] * (1 + 1e-9))
         unit = mesh.normals.reshape(-1, columns, 3)[:, :-1]
         np.testing.assert_allclose(np.linalg.norm(unit, axis=2), 1.0, atol=1e-12)
-        around_tangent = np.roll(rings, -1, axis=1) - np.roll(rings, 1, axis=1)
-        # orthogonal to the ring to O(h^2): the chord between the two neighbours of a vertex
-        cosine = np.einsum("kmi,kmi->km", unit, around_tangent) / np.linalg.norm(around_tangent, axis=2)
-        assert np.all(np.abs(cosine) <= 1e-9), mesh.name
-        # a tube whose radius is large against its bend folds over itself (neighbouring normals
-        # turn by more than a right angle there); elsewhere every triangle winds with its normals
+        # a tube whose radius is large against its steps or its bend, or whose path turns sharply,
+        # can fold over itself (neighbouring normals turn by more than a right angle there, and
+        # where the field vanishes its direction is its limit along the circle); a tube clear of
+        # all that has every normal orthogonal to its ring and every triangle wound with its normals
+        chords = np.diff(centre, axis=0)
+        chords = chords[np.linalg.norm(chords, axis=1) > 0.0]
+        unit_chords = chords / np.linalg.norm(chords, axis=1, keepdims=True)
         folds = (np.einsum("kmi,kmi->km", unit[1:], unit[:-1]).min(initial=1.0) < 0.0
-                 or np.einsum("kmi,kmi->km", unit, np.roll(unit, 1, axis=1)).min(initial=1.0) < 0.0)
+                 or np.einsum("kmi,kmi->km", unit, np.roll(unit, 1, axis=1)).min(initial=1.0) < 0.0
+                 or np.einsum("ki,ki->k", unit_chords[1:], unit_chords[:-1]).min(initial=1.0) < 0.5  # a sharp turn
+                 or radius.max() > 0.5 * np.linalg.norm(chords, axis=1).min(initial=np.inf) * (options.subdivide + 1)
+                 or not _rings_in_order(rings, centre, normal))
         if not folds:
+            around_tangent = np.roll(rings, -1, axis=1) - np.roll(rings, 1, axis=1)
+            # orthogonal to the ring to O(h^2): the chord between the two neighbours of a vertex
+            cosine = np.einsum("kmi,kmi->km", unit, around_tangent) / np.linalg.norm(around_tangent, axis=2)
+            assert np.all(np.abs(cosine) <= 1e-9), mesh.name
             corners = mesh.positions[mesh.faces]
             geometric = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
             assert np.all(np.einsum("ti,ti->t", geometric, mesh.normals[mesh.faces].sum(axis=1)) >= 0.0), mesh.name
+
+
+def _rings_in_order(rings, centre, normal) -> bool:
+    """Whether each ring lies wholly on one side of the plane of the ring before it, and that one
+    wholly on one side of its plane: consecutive rings that cross pass the surface through itself."""
+    ahead = np.einsum("kmi,ki->km", rings[1:] - centre[:-1, None], normal[:-1])
+    behind = np.einsum("kmi,ki->km", rings[:-1] - centre[1:, None], normal[1:])
+    one_side = lambda side: (side.min(axis=1) > 0.0) | (side.max(axis=1) < 0.0)  # noqa: E731
+    return bool(one_side(ahead).all() and one_side(behind).all())
 
 
 def assert_same(lines, options: TubeOptions) -> None:

@@ -198,7 +198,8 @@ def continuous_signs(field: RingNormals, smallest: np.ndarray, theta: np.ndarray
     # all but opposite. A crease (a joint of a linear or C0 spline) turns them by less, and the
     # field there is simply discontinuous: no flip.
     reversed_pairs = np.concatenate([[0], np.cumsum(agreement < -FOLD_AGREEMENT)])
-    parity = (reversed_pairs - reversed_pairs[layout.first][surface]) % 2
+    # (a surface left with no rings has its first row past the last: it is no row's surface)
+    parity = (reversed_pairs - reversed_pairs[np.minimum(layout.first, len(surface) - 1)][surface]) % 2
     examined_surface = np.bincount(surface[near], minlength=len(layout.count)) > 0
     return RingSigns(1.0 - 2.0 * parity, vertex, near, examined_surface, agreement, missing)
 
