@@ -26,11 +26,9 @@ the same basis, so on both sides of a node the derivatives of (c, n, r) are one 
 scaled by Delta_{i-1} or Delta_i: the point velocity fields are parallel there and the
 surface is tangent-continuous (C1 of its tangent planes) wherever the curve kind is C1.
 
-One implementation for any number of motions: ``Motions`` holds the nodes of M motions
-concatenated (``MotionNodes``: first node and count of each, closed or not; each motion with
-its own kind, Kochanek-Bartels parameters, weights) and builds and evaluates them all as arrays,
-at rows (motion, t). A single surface's ``MotionSpline`` is a batch of one; the batched scene and
-centreline passes evaluate whole batches of the same code.
+One implementation for any number of motions: ``Motions`` builds and evaluates M motions (nodes
+concatenated, ``MotionNodes``; each with its own kind and parameters) as arrays, at rows (motion,
+t). A surface's ``MotionSpline`` is a batch of one; the batched passes run the same code on more.
 """
 
 from __future__ import annotations
@@ -118,8 +116,7 @@ class MotionNodes:
     @staticmethod
     @lru_cache(maxsize=1024)
     def one(count: int, closed: bool = False) -> "MotionNodes":
-        """The nodes of a single motion: made once per (count, closed), so the index arrays of
-        every surface of one shape are derived once."""
+        """The nodes of one motion, made once per shape: its index arrays are derived once."""
         return MotionNodes(np.zeros(1, dtype=np.int64), np.array([count]), np.array([closed]))
 
     @cached_property
@@ -135,10 +132,6 @@ class MotionNodes:
     def local(self) -> np.ndarray:
         """Each node's index within its motion (N,)."""
         return np.arange(int(self.count.sum())) - np.repeat(self.first, self.count)
-
-    @cached_property
-    def is_first(self) -> np.ndarray:
-        return self.local == 0
 
     @cached_property
     def is_last(self) -> np.ndarray:
@@ -165,14 +158,21 @@ class MotionNodes:
         i = self.span_start
         return np.where(self.is_last[i], self.first[self.motion[i]], i + 1)
 
+    @cached_property
     def node_spans(self) -> tuple[np.ndarray, np.ndarray]:
         """The span before and after every node (N,); an open end's missing one repeats the other."""
         after = self.span_first[self.motion] + self.local
         closed = self.is_closed[self.motion]
-        before = np.where(self.is_first, np.where(closed, (self.span_first + self.span_count - 1)[self.motion], after),
-                          after - 1)
+        last_span = (self.span_first + self.span_count - 1)[self.motion]
+        before = np.where(self.local == 0, np.where(closed, last_span, after), after - 1)
         after = np.where(self.is_last & ~closed, before, after)
         return before, after
+
+    @cached_property
+    def neighbours(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The node after, before (at an open end: the node itself) and preceding (N,) every node."""
+        before, after = self.node_spans
+        return self.span_end[after], self.span_start[before], np.maximum(np.arange(len(self.motion)) - 1, 0)
 
 
 def orient_normals(centre: np.ndarray, normal: np.ndarray, radius: np.ndarray, nodes: MotionNodes) -> np.ndarray:
@@ -191,22 +191,18 @@ def orient_normals(centre: np.ndarray, normal: np.ndarray, radius: np.ndarray, n
     n_{i-1} . n_i, so s_i is the product of sign(q_k) since the motion's start or the last
     q_k = 0 (which resets the sign to +1): a segmented parity.
     """
-    before, after = nodes.node_spans()  # at an open end the one span there: the node itself is its neighbour
-    ahead, behind = nodes.span_end[after], nodes.span_start[before]
+    ahead, behind, previous = nodes.neighbours
     direction = centre[ahead] - centre[behind]
     length = np.linalg.norm(direction, axis=1)
     reliable = length > PATH_FRACTION * radius
     unit = np.where(reliable[:, None], direction / np.where(reliable, length, 1.0)[:, None], 0.0)
     along = np.einsum("ni,ni->n", normal, unit)
-    index = np.arange(len(centre))
-    previous = np.maximum(index - 1, 0)
     near_path = reliable & (np.abs(along) >= PATH_COSINE)
     case_path = near_path & near_path[previous]
     q = np.where(case_path, along * along[previous], np.einsum("ni,ni->n", normal[previous], normal))
-    reset = nodes.is_first | (q == 0.0)
-    negative = np.where(reset, 0, q < 0.0).astype(np.int64)
-    count = np.cumsum(negative)
-    start = np.maximum.accumulate(np.where(reset, index, 0))
+    reset = (nodes.local == 0) | (q == 0.0)
+    count = np.cumsum((q < 0.0) & ~reset)
+    start = np.maximum.accumulate(np.where(reset, np.arange(len(q)), 0))
     sign = 1.0 - 2.0 * ((count - count[start]) % 2)  # the negatives after the reset (its own is 0)
     return normal * sign[:, None]
 
@@ -283,19 +279,15 @@ class Motions:
     def through(cls, centre: np.ndarray, normal: np.ndarray, radius: np.ndarray, nodes: MotionNodes,
                 kind="catmull_rom", tension=0.0, bias=0.0, continuity=0.0, weights=None, align=True) -> "Motions":
         """The motions through control circles (centre (N, 3), normal (N, 3), radius (N,)), the
-        nodes of motion m being first[m] ... first[m] + count[m] - 1 (motion after motion, first
-        the running sum of count). kind: a name or (M,) names;
+        nodes of motion m being first[m] ... first[m] + count[m] - 1, motion after motion. kind,
         tension, bias, continuity (kb), align: one for all or (M,); weights (N,) or None (ones)."""
         centre = np.asarray(centre, dtype=np.float64)
         normal = np.asarray(normal, dtype=np.float64)
         normal = normal / np.linalg.norm(normal, axis=1, keepdims=True)
         radius = np.asarray(radius, dtype=np.float64)
         motion = nodes.motion
-        if isinstance(kind, str):
-            kind = np.full(len(nodes.count), KINDS.index(kind))
-        else:
-            names, code = np.unique(kind, return_inverse=True)
-            kind = np.array([KINDS.index(name) for name in names])[code]
+        names, code = ([kind], 0) if isinstance(kind, str) else np.unique(kind, return_inverse=True)  # one or (M,)
+        kind = np.resize(np.array([KINDS.index(name) for name in names])[code], nodes.count.shape)
         align = np.asarray(align)
         if align.any():
             oriented = orient_normals(centre, normal, radius, nodes)
@@ -310,27 +302,28 @@ class Motions:
         i, j = nodes.span_start, nodes.span_end
         spans, cosine = span_lengths(centre, normal, radius, i, j)
         secant = (values[j] - values[i]) / spans[:, None]  # (S, 7)
-        span_before, span_after = nodes.node_spans()
+        span_before, span_after = nodes.node_spans
         before, after = secant[span_before], secant[span_after]
         catmull_rom = kind == KINDS.index("catmull_rom")  # kb with tension = bias = continuity = 0
-        t, b, c = (np.where(catmull_rom, 0.0, v)[motion][:, None] for v in (tension, bias, continuity))
+        t, b, c = (0.0, 0.0, 0.0) if catmull_rom.all() else (tension, bias, continuity)  # one set: weights made once
+        if np.ndim(t) or np.ndim(b) or np.ndim(c) or catmull_rom.any() and not catmull_rom.all():  # one per motion
+            t, b, c = (np.where(catmull_rom, 0.0, v)[motion][:, None] for v in (tension, bias, continuity))
         # the Kochanek-Bartels weights of the secant slopes before and after each node
         slopes_out = (1 - t) * (1 + b) * (1 + c) / 2 * before + (1 - t) * (1 - b) * (1 - c) / 2 * after
         slopes_in = (1 - t) * (1 + b) * (1 - c) / 2 * before + (1 - t) * (1 - b) * (1 + c) / 2 * after
         slopes_out[:, 6] = monotone_slopes(slopes_out[:, 6], before[:, 6], after[:, 6])
         slopes_in[:, 6] = monotone_slopes(slopes_in[:, 6], before[:, 6], after[:, 6])
-        hermite_node = ((kind == KINDS.index("kb")) | catmull_rom)[motion][:, None]  # else no slopes
-        slopes_out, slopes_in = np.where(hermite_node, slopes_out, 0.0), np.where(hermite_node, slopes_in, 0.0)
+        hermite_node = ((kind == KINDS.index("kb")) | catmull_rom)[motion]
+        if not hermite_node.all():  # linear and Bezier motions have no slopes
+            slopes_out[~hermite_node] = slopes_in[~hermite_node] = 0.0
         bumps = _bumps(centre[i], centre[j], normal[i], normal[j])
         return cls(nodes, kind, values, weights, spans, cosine, slopes_out, slopes_in, bumps)
 
     @classmethod
     def concatenate(cls, parts: list["Motions"]) -> "Motions":
         """The motions of every part, in order, as one batch (no arithmetic: the parts' arrays joined)."""
-        node_offset = np.concatenate([[0], np.cumsum([len(p.values) for p in parts])[:-1]])
-        nodes = MotionNodes(np.concatenate([p.nodes.first + o for p, o in zip(parts, node_offset)]),
-                            np.concatenate([p.nodes.count for p in parts]),
-                            np.concatenate([p.nodes.is_closed for p in parts]))
+        count = np.concatenate([p.nodes.count for p in parts])
+        nodes = MotionNodes(np.cumsum(count) - count, count, np.concatenate([p.nodes.is_closed for p in parts]))
         joined = {name: np.concatenate([getattr(p, name) for p in parts])
                   for name in ("kind", "values", "weights", "spans", "cosine", "slopes_out", "slopes_in", "bumps")}
         return cls(nodes, **joined)
@@ -371,30 +364,35 @@ class Motions:
 
     def _values(self, motion: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The 7 spline components and their d/dt (A, 7) of rows (motion, t), before the normal is normalised."""
-        is_global = self.kind[motion] >= len(PIECEWISE_KINDS)
+        is_global = self.kind >= len(PIECEWISE_KINDS)
         if not is_global.any():
-            segment, s = split_parameter(t, self.nodes.span_count[motion])
-            return self._span_values(self.nodes.span_first[motion] + segment, s)
+            return self._piecewise_values(motion, t)
+        orders = np.unique(self.nodes.count[is_global]) - 1  # one Bernstein basis per order present (a handful)
+        if is_global.all() and len(orders) == 1:
+            return self._bezier_values(motion, t, orders[0])
+        is_global = is_global[motion]
         value, rate = np.empty((len(t), 7)), np.empty((len(t), 7))
         rows = np.flatnonzero(~is_global)
         if rows.size:
-            value[rows], rate[rows] = self._values(motion[rows], t[rows])
+            value[rows], rate[rows] = self._piecewise_values(motion[rows], t[rows])
         count = self.nodes.count[motion]
-        for order in np.unique(count[is_global]) - 1:  # one Bernstein basis per order present (a handful)
+        for order in orders:
             rows = np.flatnonzero(is_global & (count == order + 1))
             value[rows], rate[rows] = self._bezier_values(motion[rows], t[rows], order)
         return value, rate
+
+    def _piecewise_values(self, motion: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        segment, s = split_parameter(t, self.nodes.span_count[motion])
+        return self._span_values(self.nodes.span_first[motion] + segment, s)
 
     def _bezier_values(self, motion: np.ndarray, t: np.ndarray, order: int) -> tuple[np.ndarray, np.ndarray]:
         """``_values`` of rows of Bezier motions of one order: the Bernstein basis (the rational
         one, its weights row by row, for rational_bezier) times the controls."""
         b, db = bernstein(order, t), bernstein_derivative(order, t)
         index = self.nodes.first[motion][:, None] + np.arange(order + 1)
-        rational = self.kind[motion] == KINDS.index("rational_bezier")
-        if rational.all():
-            w = self.weights[index]
-            b, db = rational_weights(b, db, w / w.max(axis=1)[:, None])
-        elif rational.any():
+        rational = self.kind == KINDS.index("rational_bezier")
+        if rational.any():
+            rational = slice(None) if rational.all() else np.flatnonzero(rational[motion])
             w = self.weights[index[rational]]
             b[rational], db[rational] = rational_weights(b[rational], db[rational], w / w.max(axis=1)[:, None])
         picked = self.values[index]
@@ -405,16 +403,19 @@ class Motions:
         Hermite basis times (X_i, Delta M_i^out, X_j, Delta M_j^in); on a linear span the basis
         (1 - s, 0, s, 0), the linear interpolation (its two products are the only terms)."""
         i, j = self.nodes.span_start[span], self.nodes.span_end[span]
-        h, dh = hermite(s)
-        linear = self.kind[self.nodes.motion[i]] == KINDS.index("linear")
-        if linear.any():
-            zero = np.zeros_like(s)
-            h = np.where(linear[:, None], np.stack([1.0 - s, zero, s, zero], axis=1), h)
-            dh = np.where(linear[:, None], np.array([-1.0, 0.0, 1.0, 0.0]), dh)
-        width = self.spans[span][:, None]
-        terms = np.stack([self.values[i], width * self.slopes_out[i], self.values[j], width * self.slopes_in[j]],
-                         axis=1)
-        value, rate = np.einsum("ah,ahk->ak", h, terms), np.einsum("ah,ahk->ak", dh, terms)
+        start, end = self.values[i], self.values[j]
+        linear = self.kind == KINDS.index("linear")
+        if linear.all():  # that basis's two products alone
+            value, rate = (1.0 - s)[:, None] * start + s[:, None] * end, end - start
+        else:
+            h, dh = hermite(s)
+            if linear.any():
+                linear, zero = linear[self.nodes.motion[i]][:, None], np.zeros_like(s)
+                h = np.where(linear, np.stack([1.0 - s, zero, s, zero], axis=1), h)
+                dh = np.where(linear, np.array([-1.0, 0.0, 1.0, 0.0]), dh)
+            width = self.spans[span][:, None]
+            terms = np.stack([start, width * self.slopes_out[i], end, width * self.slopes_in[j]], axis=1)
+            value, rate = np.einsum("ah,ahk->ak", h, terms), np.einsum("ah,ahk->ak", dh, terms)
         # The bump 16 s^2 (1 - s)^2 w: zero with zero slope at both ends, so the nodes and
         # the slopes there are untouched (C1 kept); 1 at mid-span.
         bump = self.bumps[span]
@@ -429,7 +430,7 @@ class Motions:
         segments = self.segment_count
         dense = samples_per_segment * segments + 1
         motion = np.repeat(np.arange(len(segments)), dense)
-        local = np.arange(int(dense.sum())) - np.repeat(np.cumsum(dense) - dense, dense)
+        local = np.arange(len(motion)) - np.repeat(np.cumsum(dense) - dense, dense)
         t = local * (segments / (dense - 1.0))[motion]
         t[np.cumsum(dense) - 1] = segments
         value, _ = self._values(motion, t)
@@ -460,11 +461,8 @@ class Motions:
 
 @dataclass(frozen=True)
 class MotionSpline:
-    """The splined similarity motion of one motor surface, in its local frame: ``Motions`` of one.
-
-    ``kind`` the scene's curve kind; ``nodes`` (n, 7) centre, oriented unit normal, radius of each
-    control; ``weights`` the rational form's (ones for a plain Bezier; None for the piecewise kinds).
-    """
+    """One motor surface's motion (local frame), ``Motions`` of one: ``kind`` the curve kind, ``nodes``
+    (n, 7) the controls' centre, oriented normal, radius, ``weights`` (Bezier kinds only) or None."""
 
     motions: Motions
 
@@ -499,7 +497,7 @@ class MotionSpline:
     def evaluate(self, t: np.ndarray) -> MotionState:
         """Centre, unit normal, radius and their d/dt at parameters t (A,) in [0, segment_count]."""
         t = np.asarray(t, dtype=np.float64)
-        return self.motions.evaluate(np.zeros(len(t), dtype=np.int64), t)
+        return self.motions.evaluate(np.zeros(t.shape, dtype=np.int64), t)
 
     def check_normals(self, name: str, samples_per_segment: int) -> None:
         """Raise where the normal spline comes near zero (the plane's direction is lost there)."""
