@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cgamesh.geometry.motors import MONOTONE_LIMIT
+from cgamesh.geometry.motors import monotone_slopes
 
 # A node whose rings reach beyond this many radii of the centreline (see the module doc) turns.
 ENVELOPE_LIMIT = 1.25
@@ -231,17 +231,14 @@ def _hermite_scalar(v0, v1, m0, m1, length, s):
 
 def _radius_slopes(radii, length, chain_first, chain_last) -> np.ndarray:
     """(n,) the motion's radius slopes per unit length at the nodes: Catmull-Rom slopes limited
-    as Fritsch and Carlson prescribe (``motors._monotone``), one-sided at chain ends."""
+    as Fritsch and Carlson prescribe (``motors.monotone_slopes``), one-sided at chain ends."""
     index = np.arange(len(radii))
     secant = np.zeros(len(radii))
     secant[:-1] = (radii[1:] - radii[:-1]) / length[:-1]
     secant[chain_last] = secant[np.maximum(chain_last - 1, 0)]
     before = np.where(index == chain_first, secant, secant[np.maximum(index - 1, 0)])
     after = secant
-    slope = 0.5 * (before + after)
-    bound = MONOTONE_LIMIT * np.minimum(np.abs(before), np.abs(after))
-    limited = np.sign(after) * np.minimum(np.abs(slope) * (np.sign(slope) == np.sign(after)), bound)
-    return np.where(before * after > 0.0, limited, 0.0)
+    return monotone_slopes(0.5 * (before + after), before, after)
 
 
 def _rings(p, radii, radius_slope, tangents, slope, length, u_in, u_out, first_of, last_of, node,

@@ -70,13 +70,18 @@ class RationalBezier:
         order = self.control_count - 1
         w = np.asarray(self.weights, dtype=np.float64)
         w = w / w.max()  # the curve is unchanged by a common factor; 1e300 weights stay finite
-        b, db = bernstein(order, t), bernstein_derivative(order, t)
-        # row sums, not b @ w: BLAS's matrix-vector kernel sums a lone row, or a few, in another
-        # order than many, and a curve's basis must not depend on how many parameters it is given
-        denominator = (b * w).sum(axis=1)
-        d_denominator = (db * w).sum(axis=1)
-        rational = b * w / denominator[:, None]
-        # Quotient rule of eq. 32, written per basis function.
-        d_rational = (db * w - rational * d_denominator[:, None]) / denominator[:, None]
+        rational, d_rational = rational_weights(bernstein(order, t), bernstein_derivative(order, t), w)
         indices = np.broadcast_to(np.arange(self.control_count), rational.shape)
         return CurveBasis(indices, rational, d_rational)
+
+
+def rational_weights(b: np.ndarray, db: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """b_i w_i / sum b_j w_j (A, n) and its d/dalpha, from the Bernstein basis b, db (A, n) and
+    the weights w, (n,) or one row per parameter (A, n), divided by their largest."""
+    # row sums, not b @ w: BLAS's matrix-vector kernel sums a lone row, or a few, in another
+    # order than many, and a curve's basis must not depend on how many parameters it is given
+    denominator = (b * w).sum(axis=1)
+    d_denominator = (db * w).sum(axis=1)
+    rational = b * w / denominator[:, None]
+    # Quotient rule of eq. 32, written per basis function.
+    return rational, (db * w - rational * d_denominator[:, None]) / denominator[:, None]

@@ -16,8 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.errors import CgameshError, DegenerateGeometryError
-from cgamesh.geometry.motors import lost_plane
+from cgamesh.errors import DegenerateGeometryError
 from cgamesh.geometry.surface import SCAN_SAMPLES_PER_SEGMENT
 from cgamesh.meshing.batch_pass.circle_rows import CircleRows
 from cgamesh.meshing.batch_pass.motions import ChainMotions
@@ -74,30 +73,6 @@ def _rows(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, chain: n
                     row_origin, row_scale, t)
 
 
-def _lost_planes(motions: ChainMotions, chains: np.ndarray, names) -> dict[int, CgameshError]:
-    """The errors of the chains (indices (n,)) whose normal spline comes near zero on the scan
-    of a motor surface's check (SCAN_SAMPLES_PER_SEGMENT samples per span)."""
-    if not len(chains):
-        return {}
-    spans = motions.nodes.count[chains] - 1
-    samples = SCAN_SAMPLES_PER_SEGMENT * spans + 1
-    t, which = _linspace_parameters(spans, samples)
-    chain = chains[which]
-    segment = np.clip(np.floor(t), 0, motions.nodes.count[chain] - 2).astype(np.int64)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        state = motions.evaluate(motions.nodes.span_first[chain] + segment, t - segment)
-    finite = (np.isfinite(state.centre).all(axis=1) & np.isfinite(state.radius)
-              & np.isfinite(state.normal_length))
-    errors = {}
-    first = np.concatenate([[0], np.cumsum(samples)])
-    for k, c in enumerate(chains):
-        rows = slice(first[k], first[k + 1])
-        error = lost_plane(names[c], t[rows], state.normal_length[rows], finite[rows], int(spans[k]))
-        if error is not None:
-            errors[int(c)] = error
-    return errors
-
-
 def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, around: int,
                 subdivide: int, names) -> TubeArrays:
     """Tubes of ``around`` vertices per ring and ``subdivide`` rings between nodes for every chain
@@ -116,7 +91,8 @@ def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, ar
                               np.zeros(chains, dtype=bool), resample)
     meshes = mesh_rings(rings, SurfaceRows.of_counts(along), surfaces, around, distinct=True)
     del rings
-    errors = _lost_planes(motions, np.flatnonzero(~motions.certified), names)
+    # a normal spline its bound does not certify is scanned as a motor surface's check scans it
+    errors = motions.lost_planes(names, SCAN_SAMPLES_PER_SEGMENT) if not motions.certified.all() else {}
     for c in np.flatnonzero(~meshes.meshed):  # a motor circle is never a line: rings that all coincide
         errors.setdefault(int(c), meshes.errors.get(int(c)) or DegenerateGeometryError(
             f"surface '{names[c]}': the tube could not be meshed"))

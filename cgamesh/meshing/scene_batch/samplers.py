@@ -12,11 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from cgamesh.geometry.curves import split_parameter
-from cgamesh.geometry.curves.bezier import Bezier, RationalBezier
-from cgamesh.geometry.curves.kochanek_bartels import hermite
 from cgamesh.geometry.motor_surface import SCAN_SAMPLES_PER_SEGMENT, circle_blades_and_rates
-from cgamesh.geometry.motors import GLOBAL_KINDS, MIN_NORMAL_LENGTH, MotionState
+from cgamesh.geometry.motors import Motions
 from cgamesh.geometry.projection import project
 from cgamesh.geometry.surface import MIN_MARGIN
 from cgamesh.meshing.scene_batch.projection_scan import exactly_projectable, surely_projectable
@@ -51,64 +48,18 @@ class BladeSampler:
 
 
 class MotorSampler:
-    """Motor-interpolated circles: each surface's MotionSpline (same kind, node count, closed and
-    rational weights) stacked, evaluated as MotionSpline.evaluate does (MotorSurface.sample)."""
+    """Motor-interpolated circles, kept for scene.py: the surfaces' motions (``MotionSpline``s)
+    joined into one ``Motions`` batch, evaluated by its code as MotorSurface.sample does."""
 
     def __init__(self, paths):
-        first = paths[0]
-        self.kind, self.closed, self.weights = first.kind, first.closed, first.weights
-        self.nodes = np.stack([path.nodes for path in paths])
-        self.segment_count = first.segment_count
-        if self.kind not in GLOBAL_KINDS:
-            self.spans = np.stack([path.spans for path in paths])
-            self.bumps = np.stack([path.bumps for path in paths])
-            if self.kind != "linear":
-                self.slopes_out = np.stack([path.slopes_out for path in paths])
-                self.slopes_in = np.stack([path.slopes_in for path in paths])
-
-    def _values(self, surface: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """MotionSpline._values of rows (surface, t)."""
-        count, n = self.nodes.shape[:2]
-        if self.kind in GLOBAL_KINDS:
-            curve = Bezier(n) if self.kind == "bezier" else RationalBezier(self.weights)
-            basis = curve.basis(t)
-            picked = self.nodes.reshape(-1, 7)[basis.indices + (surface * n)[:, None]]
-            return (np.einsum("ak,akm->am", basis.weights, picked),
-                    np.einsum("ak,akm->am", basis.derivatives, picked))
-        segment, s = split_parameter(t, self.segment_count)
-        i, j = segment, (segment + 1) % n
-        start, end = self.nodes[surface, i], self.nodes[surface, j]
-        if self.kind == "linear":
-            value = (1.0 - s)[:, None] * start + s[:, None] * end
-            rate = end - start
-        else:
-            h, dh = hermite(s)
-            span = self.spans[surface, segment][:, None]
-            terms = np.stack([start, span * self.slopes_out[surface, i], end, span * self.slopes_in[surface, j]],
-                             axis=1)
-            value = np.einsum("ah,ahk->ak", h, terms)
-            rate = np.einsum("ah,ahk->ak", dh, terms)
-        bump = self.bumps[surface, segment]
-        value[:, 3:6] += (16.0 * s * s * (1.0 - s) ** 2)[:, None] * bump
-        rate[:, 3:6] += (32.0 * s * (1.0 - s) * (1.0 - 2.0 * s))[:, None] * bump
-        return value, rate
+        self.motions = Motions.concatenate([path.motions for path in paths])
+        self.segment_count = paths[0].segment_count
 
     def scan_ok(self, t: np.ndarray) -> np.ndarray:
-        """MotionSpline.check_normals: the normal spline stays at least MIN_NORMAL_LENGTH long."""
-        count = len(self.nodes)
-        dense = np.linspace(0.0, self.segment_count, SCAN_SAMPLES_PER_SEGMENT * self.segment_count + 1)
-        value, _ = self._values(np.repeat(np.arange(count), len(dense)), np.tile(dense, count))
-        length = np.linalg.norm(value[:, 3:6], axis=1)
-        bad = ~(length >= MIN_NORMAL_LENGTH) | ~np.all(np.isfinite(value), axis=1)
-        return ~bad.reshape(count, -1).any(axis=1)
+        """MotorSurface.check_projection_exists: the normal spline stays at least MIN_NORMAL_LENGTH long."""
+        return self.motions.normals_ok(SCAN_SAMPLES_PER_SEGMENT)
 
     def at(self, surface: np.ndarray, t: np.ndarray):
-        value, rate = self._values(surface, t)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            h, dh = value[:, 3:6], rate[:, 3:6]
-            length = np.linalg.norm(h, axis=1)
-            normal = h / length[:, None]
-            d_normal = (dh - normal * np.einsum("ai,ai->a", normal, dh)[:, None]) / length[:, None]
-            state = MotionState(value[:, :3], normal, value[:, 6], rate[:, :3], d_normal, rate[:, 6], length)
-            blades, rates = circle_blades_and_rates(state)
+            blades, rates = circle_blades_and_rates(self.motions.evaluate(surface, t))
         return blades, rates, np.ones(len(t), dtype=bool)
