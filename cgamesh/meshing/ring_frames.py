@@ -98,9 +98,9 @@ def transported_axes(normal: np.ndarray, local: np.ndarray) -> tuple[np.ndarray,
 def holonomy(u: np.ndarray, normal: np.ndarray, first: np.ndarray, last: np.ndarray) -> np.ndarray:
     """Signed angles (L,) about the first ring's normal from the first to the last transported
     axis u of loops whose rings are rows ``first`` .. ``last`` (L,) of u and normal (R, 3)."""
-    start, end = u[first], u[last]
-    sine = np.einsum("li,li->l", np.cross(start, end), normal[first])
-    return np.arctan2(sine, np.einsum("li,li->l", start, end))
+    # loop by loop (there are few): np.dot's sums, which the angle's last bits follow
+    return np.array([np.arctan2(np.dot(np.cross(u[a], u[b]), normal[a]), np.dot(u[a], u[b]))
+                     for a, b in zip(first, last)], dtype=np.float64)
 
 
 def close_loops(u: np.ndarray, v: np.ndarray, normal: np.ndarray, t: np.ndarray, first: np.ndarray,
