@@ -58,7 +58,7 @@ from cgamesh.geometry.curves import CurveBasis
 from cgamesh.errors import CgameshError, DegenerateGeometryError, InvalidInputError
 from cgamesh.geometry.frame import LocalFrame
 from cgamesh.meshing.mesh import SurfaceMesh
-from cgamesh.meshing.circles import grid_faces
+from cgamesh.meshing.circles import drop_zero_area, grid_faces
 from cgamesh.meshing.normals import expand
 from cgamesh.geometry.objects import point_pair_endpoints
 from cgamesh.geometry.projection import Projection, project, project_scalar
@@ -154,16 +154,11 @@ class _Batch:
         derivative = np.einsum("ak,akm->am", basis.derivatives, picked)
         size, scalar = basis.weight_sum(), self.scalar[owner]
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            if not scalar.any():
-                projected = project(interpolant, derivative, 2, size)
-                blades, rates, margin = projected.blades, projected.derivatives, projected.margin
-            else:  # four-vector free surfaces take the scalar projection, as ``sample`` chooses
-                blades, rates, margin = np.empty_like(interpolant), np.empty_like(interpolant), np.empty(len(t))
-                for rows, projector in ((~scalar, project), (scalar, project_scalar)):
-                    if rows.any():
-                        projected = projector(interpolant[rows], derivative[rows], 2, size[rows])
-                        blades[rows], rates[rows], margin[rows] = (projected.blades, projected.derivatives,
-                                                                   projected.margin)
+            blades, rates, margin = np.empty_like(interpolant), np.empty_like(interpolant), np.empty(len(t))
+            for rows, projector in ((~scalar, project), (scalar, project_scalar)):  # as ``sample`` chooses
+                if rows.any():
+                    projected = projector(interpolant[rows], derivative[rows], 2, size[rows])
+                    blades[rows], rates[rows], margin[rows] = projected.blades, projected.derivatives, projected.margin
             a, b, da, db = _pair_rings(blades, rates, self.origin[owner], self.scale[owner])
         bad = ~(margin >= MIN_MARGIN) | ~np.isfinite(a).all(axis=1) | ~np.isfinite(b).all(axis=1)
         if bad.any():  # the rare refusal, named by the surface's own ``sample``
@@ -279,11 +274,11 @@ def _mesh_batch(batch: _Batch, around: int, closed: bool) -> list[SurfaceMesh]:
         normals[:, -1] = normals[:, 0] * np.where(agree == 0.0, 1.0, agree)[:, None, None]
     positions, normals = positions.reshape(count, -1, 3), normals.reshape(count, -1, 3)
     faces = _wound_faces(batch, positions, normals, signs[:, 0].reshape(count, along), rows, turned, around)
-    kept = _nonzero_area(positions, faces, size_sq.reshape(count, -1) <= NEAR_ZERO_FRACTION**2)
+    near_zero = size_sq.reshape(count, -1) <= NEAR_ZERO_FRACTION**2  # zero-area triangles are looked for there
     ends = np.stack([rings.a, 0.5 * (rings.a + rings.b), rings.b], axis=1).reshape(count, along, 3, 3)
     uvs = uv_map.grid_uvs(uv_map.along_coordinates(ends), around)
     return [SurfaceMesh(name=surface.name, positions=positions[i], normals=normals[i], uvs=uvs[i],
-                        faces=faces[i] if kept is None or kept[i].all() else faces[i][kept[i]], double_sided=True)
+                        faces=drop_zero_area(positions[i], faces[i], np.flatnonzero(near_zero[i])), double_sided=True)
             for i, surface in enumerate(batch.surfaces)]
 
 
@@ -310,17 +305,12 @@ def _ruling_normals(batch: _Batch, rings: PairRings, d: np.ndarray):
         still = np.flatnonzero(flat & ~(size > ZERO_FRACTION * scale))
         if still.size:  # each such surface named at its first ruling that stands still
             owners, first = np.unique(batch.owner[still], return_index=True)
-            raise _Refused({int(s): _no_area(batch.surfaces[s], batch.t_rows[still[i]], batch.end)
-                            for s, i in zip(owners, first)})
+            at = batch.t_rows[still[first]]
+            segment = np.minimum(at.astype(int), batch.end - 1)
+            raise _Refused({int(s): DegenerateGeometryError(
+                f"surface '{batch.surfaces[s].name}': the ribbon has no area at segment {k}, alpha = {t - k:.6g} "
+                "(its segments stand still or slide along their own line)") for s, k, t in zip(owners, segment, at)})
     return n_a, n_b, scale
-
-
-def _no_area(surface: EvolvedSurface, t: float, end: int) -> DegenerateGeometryError:
-    segment = min(int(t), end - 1)
-    return DegenerateGeometryError(
-        f"surface '{surface.name}': the ribbon has no area at segment {segment}, alpha = "
-        f"{t - segment:.6g} (its segments stand still or slide along their own line)"
-    )
 
 
 def _ruling_values(n_a: np.ndarray, n_b: np.ndarray, s: np.ndarray, scale: np.ndarray) -> np.ndarray:
@@ -464,24 +454,6 @@ def _wound_faces(batch: _Batch, positions: np.ndarray, normals: np.ndarray, ring
     wrong = index[np.einsum("fi,fi->f", geometric, normals.reshape(-1, 3)[vertices].sum(axis=1)) < 0.0]
     flat[wrong] = flat[wrong][:, [0, 2, 1]]
     return faces
-
-
-def _nonzero_area(positions: np.ndarray, faces: np.ndarray, suspect: np.ndarray) -> np.ndarray | None:
-    """(S, F) bool: the triangles kept, those of zero area among the ones touching a ``suspect``
-    (S, V) vertex dropped; None when all are kept."""
-    if not suspect.any():
-        return None
-    surface, face = np.nonzero(suspect[np.arange(len(faces))[:, None, None], faces].any(axis=2))
-    if surface.size == 0:
-        return None
-    p = positions[surface[:, None], faces[surface, face]]
-    edge_a, edge_b = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
-    area2 = np.linalg.norm(np.cross(edge_a, edge_b), axis=1)
-    longest = np.maximum(np.einsum("ti,ti->t", edge_a, edge_a), np.einsum("ti,ti->t", edge_b, edge_b))
-    degenerate = area2 <= 1e-12 * longest
-    kept = np.ones(faces.shape[:2], dtype=bool)
-    kept[surface[degenerate], face[degenerate]] = False
-    return kept
 
 
 def _unit_normals(n_a: np.ndarray, n_b: np.ndarray, s: np.ndarray, scale: np.ndarray,
