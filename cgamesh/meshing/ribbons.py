@@ -271,10 +271,12 @@ def _mesh_batch(batch: _Batch, around: int, closed: bool) -> list[SurfaceMesh]:
     if closed:  # the last ruling is the first one again: same vertices, same normals
         positions[:, -1] = positions[:, 0]
         agree = np.sign(np.einsum("smc,smc->s", normals[:, -1], normals[:, 0]))
-        normals[:, -1] = normals[:, 0] * np.where(agree == 0.0, 1.0, agree)[:, None, None]
+        seam = normals[:, 0] * np.where(agree == 0.0, 1.0, agree)[:, None, None]
+        # where that turns a vertex of the last ruling over, the quad before it is wound by geometry
+        turned_over = np.einsum("smc,smc->sm", normals[:, -1], seam).min(axis=1) < 0.0
+        rows = np.union1d(rows, (np.flatnonzero(turned_over) + 1) * along - 1)
+        normals[:, -1] = seam
     positions, normals = positions.reshape(count, -1, 3), normals.reshape(count, -1, 3)
-    if closed:  # the seam's ruling took the first one's normals: the quad before it is wound by geometry
-        rows = np.union1d(rows, np.arange(1, count + 1) * along - 1)
     faces = _wound_faces(batch, positions, normals, signs[:, 0].reshape(count, along), rows, turned, around)
     near_zero = size_sq.reshape(count, -1) <= NEAR_ZERO_FRACTION**2  # zero-area triangles are looked for there
     ends = np.stack([rings.a, 0.5 * (rings.a + rings.b), rings.b], axis=1).reshape(count, along, 3, 3)
