@@ -54,11 +54,6 @@ KNOWN_PRIVATE_USES: set[tuple[str, str]] = {
     ("cgamesh.meshing.batch_pass.circle_rows", "cgamesh.geometry.algebra.products._single_blade_columns"),
     ("cgamesh.meshing.scene_batch.projection_scan", "cgamesh.geometry.flatness._REFINE_ROUNDS"),
     ("cgamesh.meshing.scene_batch.projection_scan", "cgamesh.geometry.flatness._REFINE_SAMPLES"),
-    ("cgamesh.meshing.scene_batch.ribbon_group", "cgamesh.meshing.ribbons._COMPARE_AT"),
-    ("cgamesh.meshing.scene_batch.ribbon_group", "cgamesh.meshing.ribbons._may_reverse"),
-    ("cgamesh.meshing.scene_batch.ribbon_group", "cgamesh.meshing.ribbons._ruling_values"),
-    ("cgamesh.meshing.scene_batch.ribbon_group", "cgamesh.meshing.ribbons._unit"),
-    ("cgamesh.meshing.scene_batch.ribbon_group", "cgamesh.meshing.ribbons._unit_normals"),
 }
 
 # (c) (importer, forbidden module imported).

@@ -2,27 +2,37 @@
 
 Positions and normals are compared with ribbons rebuilt in clifford from the scene's numbers
 (controls, alignment, interpolant, projection, eq. 5 end points: conftest's ``oracle`` and
-``paper_weights``), never with cgamesh's own algebra.
+``paper_weights``), never with cgamesh's own algebra. On random ribbons (every curve kind, open
+and closed, directions on the exact axes, sizes 1e-6 to 1e6) the one mesher is checked against
+the readable definition (``EvolvedSurface.sample``'s point pairs, central differences of their
+end points) and for its invariants, and a batch of many surfaces against each surface alone.
 """
 
 from __future__ import annotations
 
 import math
+import os
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pygltflib
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from direction_strategies import coordinate, direction, sphere_direction
 
 from cgamesh.export.options import WriteOptions
 from cgamesh.geometry import objects
 from cgamesh.geometry.algebra import rotors
 from cgamesh.geometry.algebra.conformal import up
-from cgamesh.errors import DegenerateGeometryError, NonFiniteInputError
+from cgamesh.errors import CgameshError, DegenerateGeometryError, NonFiniteInputError
 from cgamesh.export.gltf import write_glb
 from cgamesh.pipelines.scene import Resolution, build_surface, mesh_surface
 from cgamesh.geometry.projection import project
-from cgamesh.meshing.ribbons import PairRings
+from cgamesh.geometry.objects import point_pair_endpoints
+from cgamesh.meshing.ribbons import PairRings, mesh_ribbon_surface, mesh_ribbons
 from cgamesh.inputs.scene import load_scene, parse_scene
 from cgamesh_cli.main import main
 from gltf_validator import assert_clean
@@ -339,3 +349,241 @@ def test_cli_reports_a_non_real_interpolation_and_writes_nothing(tmp_path, capsy
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "crossing_chords" in err and "alpha = 0.5" in err
     assert not output.exists()
+
+
+# --- the one mesher on random ribbons: the definition, its invariants, a batch against alone ------
+
+PROPERTY = settings(max_examples=int(os.environ.get("CGAMESH_PROPERTY_EXAMPLES", "40")), deadline=None,
+                    suppress_health_check=[HealthCheck.too_slow])
+CURVES = ("linear", "bezier", "rational_bezier", "kb", "catmull_rom")
+
+
+@st.composite
+def ribbon_shapes(draw):
+    """What the surfaces of one batch share: curve kind and parameters, closed, control count,
+    vertices across, rulings along."""
+    curve = draw(st.sampled_from(CURVES))
+    closed = curve in ("kb", "catmull_rom") and draw(st.booleans())
+    count = draw(st.integers(3 if closed else 2, 5))
+    kb = tuple(draw(st.sampled_from((0.0, 0.5, -1.0, 1.0))) for _ in range(3)) if curve == "kb" else None
+    weights = [10.0 ** draw(st.floats(-1.0, 1.0)) for _ in range(count)] if curve == "rational_bezier" else None
+    return curve, closed, count, kb, weights, draw(st.sampled_from((2, 3, 8, 16))), draw(st.sampled_from((2, 3, 9, 40)))
+
+
+@st.composite
+def ribbon_surfaces(draw, shape, name="s"):
+    """The YAML of a point-pair surface of ``shape``: pairs about a random walk of size 1e-6 to 1e6
+    (up to 1e3 sizes from the origin), their directions on the exact axes or anywhere, turning from
+    control to control (sometimes against the previous one), sometimes a control repeated."""
+    curve, closed, count, kb, weights, around, along = shape
+    scale = 10.0 ** draw(st.integers(-6, 6))
+    point = np.array(draw(st.tuples(coordinate, coordinate, coordinate))) * scale * 10.0 ** draw(st.integers(0, 3))
+    step = np.array(draw(direction))
+    lines = []
+    for i in range(count):
+        across = np.array(draw(direction))
+        half = scale * draw(st.floats(0.2, 1.0))
+        weight = f", weight: {weights[i]!r}" if weights else ""
+        lines.append(f"{{a: {(point - half * across).tolist()}, b: {(point + half * across).tolist()}{weight}}}")
+        step = step + 0.5 * np.array(draw(sphere_direction))
+        point = point + scale * draw(st.floats(0.3, 1.5)) * step / max(np.linalg.norm(step), 1e-3)
+    if draw(st.integers(0, 4)) == 0:
+        lines[1:1] = [lines[0]] if not weights else []  # a repeated control (rational: as many weights)
+    tbc = f"    tension: {kb[0]}\n    bias: {kb[1]}\n    continuity: {kb[2]}\n" if kb else ""
+    return (f"  - name: {name}\n    type: point_pairs\n    curve: {curve}\n{tbc}    closed: {str(closed).lower()}\n"
+            f"    align: {draw(st.sampled_from(('true', 'true', 'false')))}\n"
+            f"    resolution: {{around: {around}, along: {along}}}\n    controls:\n"
+            + "".join(f"      - {line}\n" for line in lines))
+
+
+@st.composite
+def ribbon_batches(draw):
+    """Scenes of 1 to 6 ribbons of one shape."""
+    shape = draw(ribbon_shapes())
+    bodies = [draw(ribbon_surfaces(shape, f"s{i}")) for i in range(draw(st.integers(1, 6)))]
+    return "cgamesh: 1\nsurfaces:\n" + "".join(bodies)
+
+
+def _built(text):
+    """(spec, surface) of every surface of the scene its builder accepts."""
+    built = []
+    for spec in parse_scene(text, "random.yaml").surfaces:
+        try:
+            built.append((spec, build_surface(spec)))
+        except CgameshError:
+            pass
+    return built
+
+
+def _alone(spec, surface):
+    """mesh_ribbon_surface's mesh, or its error; numpy warnings are errors."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            return mesh_ribbon_surface(surface, spec.around, spec.along, closed=spec.closed)
+        except CgameshError as error:
+            return error
+
+
+def _local_ends(surface, t):
+    """End points (A, 3) of the interpolated pairs in the surface's working frame (the definition:
+    EvolvedSurface.sample and eq. 5)."""
+    return point_pair_endpoints(surface.sample(t).blades)
+
+
+def _tangents_along(surface, t, h=1e-6):
+    """d a/dt, d b/dt (A, 3), local frame: central differences of the end points over +-h,
+    one-sided (second order) at the curve's ends and at the joints of segments, where the basis
+    takes the derivative from the segment that starts there."""
+    joint = (np.abs(t - np.round(t)) < 1e-12) & (t < surface.segment_count)
+    end = t >= surface.segment_count
+    sign = np.where(end, -1.0, 1.0)
+    steps = np.where(joint | end, sign * h, h)[:, None]
+    centre = ~(joint | end)
+    out = []
+    for which in (0, 1):
+        plus = _local_ends(surface, np.where(centre, t + h, t + sign * h))[which]
+        minus = _local_ends(surface, np.where(centre, t - h, t))[which]
+        twice = _local_ends(surface, np.where(centre, t, t + 2 * sign * h))[which]
+        here = _local_ends(surface, t)[which]
+        one_sided = (-3.0 * here + 4.0 * plus - twice) / (2.0 * steps)
+        out.append(np.where(centre[:, None], (plus - minus) / (2.0 * h), one_sided))
+    return out
+
+
+def check_against_the_definition(spec, surface, mesh):
+    """Vertices on the true surface, normals unit and across both tangents where the field is
+    not near a zero, triangles wound like their vertex normals, UVs oriented like the surface."""
+    along, around = spec.along, spec.around
+    t = np.linspace(0.0, surface.segment_count, along)
+    a_local, b_local = _local_ends(surface, t)
+    frame = surface.frame
+    a, b = frame.to_world(a_local), frame.to_world(b_local)
+    s = np.linspace(0.0, 1.0, around)
+    positions = mesh.positions.reshape(along, around, 3)
+    expected = a[:, None] + s[None, :, None] * (b - a)[:, None]
+    size = (np.linalg.norm(a, axis=1) + np.linalg.norm(b - a, axis=1))[:, None]
+    assert np.all(np.linalg.norm(positions - expected, axis=-1) <= 1e-12 * size)
+    normals = mesh.normals.reshape(along, around, 3)
+    assert np.abs(np.linalg.norm(normals, axis=-1) - 1.0).max() <= 1e-12
+    # tangents in the working frame (the world's are scale times these)
+    d = b_local - a_local
+    # a closed surface's last ruling repeats its first, normals included (the curve's tangent
+    # may turn at the seam): its tangent is the first one's
+    at = np.where(spec.closed & (t >= surface.segment_count), 0.0, t)
+    da, db = _tangents_along(surface, at)
+    x_t = da[:, None] + s[None, :, None] * (db - da)[:, None]
+    half_da, half_db = _tangents_along(surface, at, 0.5e-6)  # their error: about 4/3 of the change
+    error = np.linalg.norm(da - half_da, axis=1)[:, None] + np.linalg.norm(db - half_db, axis=1)[:, None]
+    raw = np.cross(np.broadcast_to(d[:, None], x_t.shape), x_t)  # (b - a) x dx/dt
+    # (differences of the unit-ball working frame round to about 1e-10: slower vertices are not judged)
+    speed = np.linalg.norm(x_t, axis=-1).max()
+    strong = (np.linalg.norm(raw, axis=-1) > 1e-3 * np.linalg.norm(d, axis=1).max() * speed) & (
+        np.linalg.norm(x_t, axis=-1) > 1e-6)
+    unit_d = d / np.linalg.norm(d, axis=1, keepdims=True)
+    assert np.abs(np.einsum("kmc,kc->km", normals, unit_d)).max() <= 1e-9
+    assert np.all((np.abs(np.einsum("kmc,kmc->km", normals, x_t)) <= 1e-6 * speed + 2.0 * error)[strong])
+    # winding: a triangle that resolves the surface (its vertex normals within 60 degrees of each
+    # other and of its own normal's line, between rulings whose chords move across them the way dx/dt does) is
+    # counter-clockwise seen from the side they point to; not judged where the grid does not
+    # resolve the surface (the field turning within a triangle next to a pinch point, a chord
+    # running against the curve's direction on a loop of three rulings), where the vote of the
+    # rulings' signs cannot tell (seen before this mesher too)
+    corners = mesh.positions[mesh.faces]
+    geometric = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    area = np.linalg.norm(geometric, axis=1)
+    longest = np.max(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=-1), axis=1)
+    solid = area > 1e-6 * longest**2
+    corner_normals = mesh.normals[mesh.faces][solid]
+    agree = np.einsum("fvc,fvc->fv", corner_normals, np.roll(corner_normals, 1, axis=1))
+    cosines = np.einsum("fc,fvc->fv", geometric[solid] / area[solid, None], corner_normals)
+    chords = np.diff(mesh.positions.reshape(along, around, 3), axis=0)  # world; x_t is local
+
+    def across(vectors, ruling):  # the part of vectors (K', M, 3) across each ruling (K', 3)
+        return vectors - np.einsum("kmc,kc->km", vectors, ruling)[..., None] * ruling[:, None]
+
+    forward = np.all((np.einsum("kmc,kmc->km", across(chords, unit_d[:-1]), across(x_t[:-1], unit_d[:-1])) > 0.0)
+                     & (np.einsum("kmc,kmc->km", across(chords, unit_d[1:]), across(x_t[1:], unit_d[1:])) > 0.0),
+                     axis=1)  # (K - 1,) by quad: the rulings move the way dx/dt does, across themselves
+    resolved = (np.all(agree > 0.5, axis=1) & np.all(np.abs(cosines) > 0.5, axis=1)
+                & forward[mesh.faces[solid].min(axis=1) // around])
+    assert np.all(cosines[resolved] > 0.0)
+    # UVs: u the fraction across, v from 0 to 1 never decreasing along, so no face is flipped in
+    # UV against the surface's parameters (s, t): a face's UV area has the sign of its (s, t) area
+    uvs = mesh.uvs.reshape(along, around, 2)
+    assert np.array_equal(uvs[..., 0], np.broadcast_to(s, (along, around)))
+    v = uvs[:, 0, 1]
+    assert v[0] == 0.0 and v[-1] == 1.0 and np.all(np.diff(v) >= 0.0) and np.all(uvs[..., 1] == v[:, None])
+    parameters = np.stack(np.broadcast_arrays(s[None, :], t[:, None]), axis=-1).reshape(-1, 2)
+
+    def signed_areas(points):
+        first, second = points[:, 1] - points[:, 0], points[:, 2] - points[:, 0]
+        return first[:, 0] * second[:, 1] - first[:, 1] * second[:, 0]
+
+    uv_area, st_area = signed_areas(mesh.uvs[mesh.faces]), signed_areas(parameters[mesh.faces])
+    assert np.all(st_area != 0.0)
+    moved = uv_area != 0.0  # v stands still between rulings that do not move
+    assert np.all(np.sign(uv_area[moved]) == np.sign(st_area[moved]))
+
+
+@PROPERTY
+@given(text=ribbon_batches())
+def test_every_ribbon_lies_on_its_definition_with_unit_normals_winding_and_uvs(text):
+    for spec, surface in _built(text):
+        mesh = _alone(spec, surface)
+        if isinstance(mesh, CgameshError):  # refused: the surface's own scan, sample or no area says so
+            message = str(mesh)
+            assert message.startswith(f"surface '{spec.name}': ") and "\n" not in message
+            continue
+        assert mesh.double_sided and mesh.faces.dtype == np.int32 and len(mesh.positions) == spec.along * spec.around
+        check_against_the_definition(spec, surface, mesh)
+
+
+@PROPERTY
+@given(text=ribbon_batches())
+def test_a_batch_gives_each_surface_what_it_gets_alone(text):
+    """mesh_ribbons over surfaces of one curve: each mesh is mesh_ribbon_surface's bit for bit,
+    and None exactly where that refuses."""
+    groups = {}
+    for spec, surface in _built(text):
+        groups.setdefault(surface.curve, []).append((spec, surface))
+    for members in groups.values():
+        spec = members[0][0]
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            batch = mesh_ribbons([surface for _, surface in members], spec.around, spec.along, closed=spec.closed)
+        for (spec, surface), meshed in zip(members, batch):
+            alone = _alone(spec, surface)
+            if isinstance(alone, CgameshError):
+                assert meshed is None
+                continue
+            assert meshed.name == alone.name and meshed.double_sided
+            for field in ("positions", "normals", "uvs", "faces"):
+                x, y = getattr(meshed, field), getattr(alone, field)
+                assert x.dtype == y.dtype and np.array_equal(x, y), field
+
+
+def _linear_ribbon(*pairs, align="true"):
+    controls = "".join(f"      - {{a: {list(a)}, b: {list(b)}}}\n" for a, b in pairs)
+    text = f"cgamesh: 1\nsurfaces:\n  - name: r\n    type: point_pairs\n    curve: linear\n    align: {align}\n"
+    return build_surface(parse_scene(text + "    controls:\n" + controls, "r.yaml").surfaces[0])
+
+
+def test_a_batch_with_refused_ribbons_meshes_the_others_as_alone():
+    """Surfaces of one curve in one call, among them two the mesher refuses: opposite controls
+    (no projection between them) and a pair sliding along its own line (no area); they get None,
+    alone they raise, and the others get their meshes alone."""
+    fine = [_linear_ribbon(((0, 0, 0), (1, 0, 0)), ((0, 1, 0), (1, 1, 0.5 + y)), ((0, 2, 0), (1, 2.5, 1)))
+            for y in (0.0, 0.5, 1.0)]
+    opposite = _linear_ribbon(((0, 0, 0), (1, 0, 0)), ((1, 1, 0), (0, 1, 0)), ((1, 2, 0), (0, 2, 0)), align="false")
+    sliding = _linear_ribbon(((0, 0, 0), (1, 0, 0)), ((0.2, 0, 0), (1.3, 0, 0)), ((0.2, 1, 0), (1.3, 1, 0.5)))
+    surfaces = fine[:1] + [opposite] + fine[1:] + [sliding]
+    meshes = mesh_ribbons(surfaces, 5, 17)
+    assert meshes[1] is None and meshes[-1] is None
+    with pytest.raises(DegenerateGeometryError, match="no blade projection at segment 0"):
+        mesh_ribbon_surface(opposite, 5, 17)
+    with pytest.raises(DegenerateGeometryError, match="no area at segment 0"):
+        mesh_ribbon_surface(sliding, 5, 17)
+    for surface, mesh in zip(fine, meshes[:1] + meshes[2:-1]):
+        alone = mesh_ribbon_surface(surface, 5, 17)
+        assert all(np.array_equal(getattr(mesh, f), getattr(alone, f)) for f in ("positions", "normals", "uvs", "faces"))

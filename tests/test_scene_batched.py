@@ -9,8 +9,8 @@ benchmark's, whose low vertex counts around put nearly every ring on the fold pa
 random scenes of several surfaces sharing and not sharing a shape of work (every curve kind,
 blade and motor interpolation, open and closed, with caps or not, aligned or not, orientations on
 the exact axes, sizes from 1e-3 to 1e3, far from the origin, through circles, repeated controls;
-point-pair ribbons among them, blade interpolated, 2 to 16 vertices across), and on scenes of
-random ribbons (the benchmark's).
+point-pair ribbons among them, blade interpolated, 2 to 16 vertices across). Ribbons have one
+mesher for one surface and many (tests/test_ribbons.py checks a batch against its surfaces alone).
 Where a surface alone is refused, the scene is refused with the same message.
 """
 
@@ -133,51 +133,6 @@ def test_random_tubes_mesh_the_same_batched_and_nearly_all_are_batched(controls,
         alone, batched = mesh_both(scene, tangents=tangents)
         assert_same_meshes(alone, batched)
     assert batched_count(scene) >= 0.9 * len(scene.surfaces)
-
-
-def random_ribbon_scene(count: int, controls: int):
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from bench_scene_batch import ribbon_document
-
-    return parse_scene(ribbon_document(count, controls), "ribbons.yaml")
-
-
-@pytest.mark.parametrize("controls", [2, 3, 5])
-def test_random_ribbons_mesh_the_same_batched_and_all_are_batched(controls):
-    scene = random_ribbon_scene(60, controls)
-    alone, batched = mesh_both(scene)
-    assert_same_meshes(alone, batched)
-    assert batched_count(scene) == len(scene.surfaces)
-    resolution = Resolution(2, 7)  # two vertices across: the rulings alone
-    alone, batched = mesh_both(scene, resolution)
-    assert_same_meshes(alone, batched)
-    assert batched_count(scene, resolution) == len(scene.surfaces)
-
-
-@pytest.mark.parametrize("curve, closed", [("linear", False), ("bezier", False), ("rational_bezier", False),
-                                           ("kb", False), ("kb", True), ("catmull_rom", True)])
-def test_random_ribbons_of_every_curve_kind_mesh_the_same_batched(curve, closed, monkeypatch):
-    """Every curve kind, open and closed; many surfaces take the all-rows path (no ruling that
-    stands still or may reverse), the others the ribbon mesher's tail on their rings."""
-    from cgamesh.meshing.scene_batch import ribbon_group
-
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    from bench_scene_batch import ribbon_document
-
-    text = ribbon_document(30, 4, seed=7).replace("    curve: catmull_rom\n",
-                                                  f"    curve: {curve}\n    closed: {str(closed).lower()}\n")
-    if curve == "kb":
-        text = text.replace("    closed:", "    tension: 0.5\n    bias: -0.5\n    continuity: 0.25\n    closed:")
-    scene = parse_scene(text, "ribbons.yaml")
-    common = []
-    original = ribbon_group._common_meshes
-    monkeypatch.setattr(ribbon_group, "_common_meshes", lambda *args: common.append(int(args[7].sum()))
-                        or original(*args))
-    alone, batched = mesh_both(scene)
-    assert_same_meshes(alone, batched)
-    assert batched_count(scene) == len(scene.surfaces)
-    # a random walk closed into a loop twists back across itself: fewer rulings are plain there
-    assert sum(common) >= len(scene.surfaces) // (3 if closed else 2)
 
 
 def test_a_ribbon_refusal_is_the_per_surface_paths():

@@ -45,6 +45,28 @@ def test_a_ribbon_starting_on_a_repeated_control_winds_with_its_normals(step, al
     assert against_normals(text) == 0
 
 
+def test_a_closed_ribbon_winds_the_quad_before_its_seam_with_its_normals():
+    """Found by a random search: the seam took the first ruling's normals, opposite to the last
+    ruling's field along part of it, and the quad before it was wound by the vote of the last
+    ruling's signs (one triangle against its normals); it is wound by geometry now."""
+    text = ('cgamesh: 1\n'
+            'surfaces:\n'
+            '  - name: s0\n'
+            '    type: point_pairs\n'
+            '    curve: kb\n'
+            '    tension: 1.0\n'
+            '    bias: 0.0\n'
+            '    continuity: 0.0\n'
+            '    closed: true\n'
+            '    align: false\n'
+            '    resolution: {around: 8, along: 9}\n'
+            '    controls:\n'
+            '      - {a: [0.25, 1.0, 0.0], b: [-0.25, -1.0, 0.0]}\n'
+            '      - {a: [-0.18350341907227385, 0.4082482904638631, 0.4082482904638631], b: [1.8164965809277263, 0.4082482904638631, 0.4082482904638631]}\n'
+            '      - {a: [1.4831632475943928, 0.7415816237971964, 0.07491495713052965], b: [1.4831632475943928, 0.7415816237971964, 2.0749149571305296]}\n')
+    assert against_normals(text) == 0
+
+
 def closed_three_ring_tube(name: str = "s", shift: float = 0.0) -> str:
     """A closed tube of 3 rings (2 distinct) whose normals turn by more than a right angle from
     ring to ring: the chord between them does not run along d/dt."""

@@ -185,7 +185,13 @@ class _Grid:
         if np.any(stationary):
             which = np.flatnonzero(stationary)
             near_t = step_inside(rings.t[which], surfaces.ends[surface[which]], 1.0)
-            read, exists = surfaces.resample(surface[which], near_t)
+            # at least two rows read: a lone row's sums can round otherwise than a batch's, and a
+            # surface's repair must read the same bits whether it is meshed alone or among others
+            pad = np.zeros(1 if len(which) == 1 else 0, dtype=np.intp)
+            read, exists = surfaces.resample(surface[np.concatenate([which, which[pad]])],
+                                             np.concatenate([near_t, near_t[pad]]))
+            if pad.size:
+                read, exists = read.take(slice(0, 1)), exists[:1]
             self.missing[surface[which[~exists]]] = True
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
                 field = field.replace_rings(stationary, nearby_normals(read, u[stationary]))
@@ -320,8 +326,8 @@ def _faces(signs: RingSigns, layout: SurfaceRows, columns: int) -> np.ndarray:
 
 def grid_faces(rings: int, columns: int, signs: np.ndarray) -> np.ndarray:
     """Triangles (2 (rings - 1)(columns - 1), 3) int32 of one (rings, columns) vertex grid whose
-    rings have the signs (rings, 1) (``_faces`` of a single surface)."""
-    ring = np.asarray(signs, dtype=np.float64).reshape(rings)
+    rings have the signs (rings, 1), or one sign for all (1, 1) (``_faces`` of a single surface)."""
+    ring = np.broadcast_to(np.asarray(signs, dtype=np.float64)[:, 0], (rings,))
     one = RingSigns(ring, np.ones((0, columns)), np.empty(0, np.intp), np.zeros(1, dtype=bool), np.ones(rings - 1),
                     np.zeros(1, dtype=bool))
     return _faces(one, SurfaceRows.of_counts([rings]), columns)

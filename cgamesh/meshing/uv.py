@@ -17,7 +17,7 @@ from cgamesh.meshing.mesh import SurfaceMesh
 
 
 def along_coordinates(ring_samples: np.ndarray) -> np.ndarray:
-    """v (K,) from points (K, S, 3) sampled at the same S places on each ring.
+    """v (..., K) from points (..., K, S, 3) sampled at the same S places on each ring.
 
     The step between rings is the mean distance the S samples travel; v is the
     running sum of steps, normalised to end at 1.
@@ -26,17 +26,19 @@ def along_coordinates(ring_samples: np.ndarray) -> np.ndarray:
 
 
 def along_lengths(ring_samples: np.ndarray) -> np.ndarray:
-    """Arc length (K,) travelled from the first ring: the running sum of the mean distance the S
-    samples (K, S, 3) move between consecutive rings."""
-    steps = np.linalg.norm(np.diff(ring_samples, axis=0), axis=-1).mean(axis=-1)
-    return np.concatenate([[0.0], np.cumsum(steps)])
+    """Arc length (..., K) travelled from the first ring: the running sum of the mean distance the
+    S samples (..., K, S, 3) move between consecutive rings."""
+    steps = np.linalg.norm(np.diff(ring_samples, axis=-3), axis=-1).mean(axis=-1)
+    return np.concatenate([np.zeros(steps.shape[:-1] + (1,)), np.cumsum(steps, axis=-1)], axis=-1)
 
 
 def normalised(travelled: np.ndarray) -> np.ndarray:
-    """``travelled`` (K,) divided by its last value (evenly spaced in [0, 1] if that is 0)."""
-    if travelled[-1] > 0.0:
-        return travelled / travelled[-1]
-    return np.linspace(0.0, 1.0, len(travelled))
+    """``travelled`` (..., K) divided by its last value (evenly spaced in [0, 1] where that is 0)."""
+    last = travelled[..., -1:]
+    moved = last > 0.0
+    if moved.all():
+        return travelled / last
+    return np.where(moved, travelled / np.where(moved, last, 1.0), np.linspace(0.0, 1.0, travelled.shape[-1]))
 
 
 def mean_along(values: np.ndarray, travelled: np.ndarray) -> float:
@@ -48,9 +50,9 @@ def mean_along(values: np.ndarray, travelled: np.ndarray) -> float:
 
 
 def grid_uvs(v: np.ndarray, columns: int) -> np.ndarray:
-    """UVs (K * columns, 2) of a (K, columns) grid: u = j / (columns - 1), v per ring."""
+    """UVs (..., K * columns, 2) of (..., K, columns) grids: u = j / (columns - 1), v (..., K) per ring."""
     u = np.linspace(0.0, 1.0, columns)
-    return np.stack(np.broadcast_arrays(u[None, :], v[:, None]), axis=-1).reshape(-1, 2)
+    return np.stack(np.broadcast_arrays(u, v[..., None]), axis=-1).reshape(v.shape[:-1] + (-1, 2))
 
 
 def disc_uvs(theta: np.ndarray, mirrored: bool = False) -> np.ndarray:

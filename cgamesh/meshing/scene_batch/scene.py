@@ -5,7 +5,7 @@ package doc) are grouped by the shape of their work (curve kind, control count, 
 parameters, closed, vertices around, rings along; for motor interpolation the motion's kind and
 node count) and their controls built (blade) or motions splined (motor, one surface at a time),
 in chunks of about CHUNK_RINGS rings; point-pair surfaces are built one by one and grouped by
-their built curve, closed, around and along (ribbon_group.py); every other surface, and every
+their built curve, closed, around and along (meshed by ribbons.mesh_ribbons); every other surface, and every
 surface whose controls the per-surface builder would refuse or change, is left to the
 per-surface path. ``mesh(i)``
 gives surface i's mesh, meshing its whole chunk the first time one of its surfaces is
@@ -21,9 +21,9 @@ import numpy as np
 from cgamesh.errors import CgameshError
 from cgamesh.geometry.construction import build_motor_surface, build_surface, make_curve
 from cgamesh.meshing.mesh import SurfaceMesh
+from cgamesh.meshing.ribbons import mesh_ribbons
 from cgamesh.meshing.scene_batch.circle_grid import mesh_circle_group
 from cgamesh.meshing.scene_batch.controls import build_blade_controls
-from cgamesh.meshing.scene_batch.ribbon_group import mesh_ribbon_group
 from cgamesh.meshing.scene_batch.samplers import BladeSampler, MotorSampler
 
 # Rings (surfaces times rings along) per chunk: measured fastest from about 800 to 1,600 on
@@ -73,7 +73,7 @@ class _RibbonChunk:
         self.meshes: dict[int, SurfaceMesh | None] | None = None
 
     def mesh_all(self, tangents: bool) -> list[SurfaceMesh | None]:
-        meshed = mesh_ribbon_group(self.surfaces, self.around, self.along, self.closed)
+        meshed = mesh_ribbons(self.surfaces, self.around, self.along, closed=self.closed)
         self.surfaces = None
         return meshed
 
