@@ -18,7 +18,7 @@ import numpy as np
 
 from cgamesh.budget import BATCHED_CHUNK_RINGS
 from cgamesh.errors import DegenerateGeometryError
-from cgamesh.meshing.batch_pass.motions import ChainMotions, ChainNodes
+from cgamesh.geometry.motors import MotionNodes, Motions
 from cgamesh.meshing.batch_pass.rings import TubeArrays, mesh_chains
 from cgamesh.meshing.circles import grid_weld
 from cgamesh.meshing.mesh import SurfaceMesh
@@ -170,7 +170,7 @@ def _mesh_chunk(members, first, count, p, t, r, options, stem: str) -> TubeArray
     # each control's normal / np.linalg.norm(normal) of its 3-vector (a dot product): matmul
     # of the 1 x 3 rows rounds as that does, the row-wise norm does not
     normal = tangent / np.sqrt(np.matmul(tangent[:, None, :], tangent[:, :, None])[:, 0])
-    motions = ChainMotions.through(local_centre, normal, radius / scale[chain], ChainNodes(local_first, c))
+    motions = Motions.through(local_centre, normal, radius / scale[chain], MotionNodes(local_first, c), "catmull_rom")
     return mesh_chains(motions, origin, scale, options.around, options.subdivide,
                        [f"{stem}_{int(index)}" for index in members])
 

@@ -1,7 +1,7 @@
 """Rings, normals, UVs and faces of many motor tubes at once: every chain's rings as rows of the
 one circle mesher (cgamesh.meshing.circles.mesh_rings).
 
-For every chain of ``ChainMotions`` the rings sit where a chain meshed alone puts them
+For every chain of ``Motions`` the rings sit where a chain meshed alone puts them
 (``np.linspace(0, spans, along)``, reproduced with linspace's own arithmetic) and are read out
 of the same circle blades (``circle_rows``, blade-major) in the chain's local frame. A chain
 whose normal spline is not certified away from zero by its bound is scanned as a motor
@@ -17,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from cgamesh.errors import DegenerateGeometryError
+from cgamesh.geometry.motors import Motions
 from cgamesh.geometry.surface import SCAN_SAMPLES_PER_SEGMENT
 from cgamesh.meshing.batch_pass.circle_rows import CircleRows
-from cgamesh.meshing.batch_pass.motions import ChainMotions
 from cgamesh.meshing.circles import CircleSurfaces, mesh_rings
 from cgamesh.meshing.ring_rows import RingRows, SurfaceRows
 
@@ -60,12 +60,12 @@ def _linspace_parameters(spans: np.ndarray, along: np.ndarray) -> tuple[np.ndarr
     return t, chain
 
 
-def _rows(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, chain: np.ndarray,
+def _rows(motions: Motions, origin: np.ndarray, scale: np.ndarray, chain: np.ndarray,
           t: np.ndarray) -> RingRows:
     """The circles of chains ``chain`` (R,) at parameters t (R,), in world units and each chain's frame."""
     nodes = motions.nodes
     segment = np.clip(np.floor(t), 0, nodes.count[chain] - 2).astype(np.int64)
-    state = motions.evaluate(nodes.span_first[chain] + segment, t - segment)
+    state = motions.span_state(nodes.span_first[chain] + segment, t - segment)
     circles = CircleRows.of(state)
     centre, normal, radius = circles.euclidean()
     row_origin, row_scale = origin[chain], scale[chain]
@@ -73,7 +73,7 @@ def _rows(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, chain: n
                     row_origin, row_scale, t)
 
 
-def mesh_chains(motions: ChainMotions, origin: np.ndarray, scale: np.ndarray, around: int,
+def mesh_chains(motions: Motions, origin: np.ndarray, scale: np.ndarray, around: int,
                 subdivide: int, names) -> TubeArrays:
     """Tubes of ``around`` vertices per ring and ``subdivide`` rings between nodes for every chain
     (frames: origin (C, 3), scale (C,); ``names`` (C,) their surfaces' names, for messages)."""
