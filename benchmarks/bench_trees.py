@@ -38,7 +38,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from trees import (DEFAULT_BASE, HERE, ROOT, Tree, TreeError, bench_scene, compile_tree, load_average, open_trees,
-                   run_once)
+                   run_once, run_tool)
 
 sys.path.insert(0, str(ROOT / "tests"))
 from realdata_files import fornix, neurons  # noqa: E402 (how the tests and bench_realdata.py find the files)
@@ -161,11 +161,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    try:
-        sys.exit(main())
-    except TreeError as error:
-        print(f"bench_trees: error: {error}", file=sys.stderr)
-        sys.exit(2)
-    except KeyboardInterrupt:
-        print("bench_trees: interrupted", file=sys.stderr)
-        sys.exit(130)
+    run_tool("bench_trees", main)

@@ -82,39 +82,25 @@ def option_scenes(seed: int = 11) -> dict[str, str]:
     return scenes
 
 
-TWO_TUBES = """\
-cgamesh: 1
-surfaces:
-  - name: bent
-    type: circles
-    curve: catmull_rom
-    uv: {uv}
-    caps: true
-    controls:
-      - {{center: [0, 0, 0], normal: [0, 0, 1], radius: 0.5}}
-      - {{center: [0.5, 0.2, 1.5], normal: [0.3, 0.1, 1], radius: 0.35}}
-      - {{center: [1.5, 0.1, 2.7], normal: [1, 0, 0.8], radius: 0.45}}
-    resolution: {{around: 12, along: 24}}
-  - name: straight
-    type: circles
-    curve: linear
-    uv: {uv}
-    controls:
-      - {{center: [3, 0, 0], normal: [0, 0, 1], radius: 0.25}}
-      - {{center: [3, 0, 4], normal: [0, 0, 1], radius: 0.25}}
-    resolution: {{around: 12, along: 8}}
-"""
+def _two_tubes() -> str:
+    """The uv-mode test's scene of two tubes (tests/test_uv_modes.py), its ``uv`` left to fill."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+    from test_uv_modes import TWO_TUBES
+
+    return TWO_TUBES
 
 
 def uv_scenes() -> dict[str, str]:
     """tests/test_uv_modes.py's two tubes in every uv mode (xatlas too: compare_trees skips it
     when xatlas is not installed)."""
-    natural = TWO_TUBES.format(uv="natural")
+    natural = _two_tubes().format(uv="natural")
     return {"uv-natural": natural,
             "uv-natural-scale-0.5": natural.replace("uv: natural", "uv: natural\n    uv_scale: 0.5"),
             "uv-natural-scale-0.1": natural.replace("uv: natural", "uv: natural\n    uv_scale: 0.1"),
-            "uv-none": TWO_TUBES.format(uv="none"),
-            "uv-xatlas": TWO_TUBES.format(uv="xatlas")}
+            "uv-none": _two_tubes().format(uv="none"),
+            "uv-xatlas": _two_tubes().format(uv="xatlas")}
 
 
 def _ribbon(name: str, controls, closed: str, around: int, along: int) -> str:

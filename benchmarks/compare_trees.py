@@ -42,7 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-from trees import DEFAULT_BASE, HERE, ROOT, TreeError, Worker, bench_scene, load_average, open_trees
+from trees import DEFAULT_BASE, HERE, ROOT, TreeError, Worker, bench_scene, load_average, open_trees, run_tool
 
 import compare_scenes
 
@@ -420,11 +420,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    try:
-        sys.exit(main())
-    except TreeError as error:
-        print(f"compare_trees: error: {error}", file=sys.stderr)
-        sys.exit(2)
-    except KeyboardInterrupt:
-        print("compare_trees: interrupted", file=sys.stderr)
-        sys.exit(130)
+    run_tool("compare_trees", main)

@@ -319,3 +319,16 @@ def compile_tree(tree: Tree) -> None:
     """Byte-compile the tree's packages, so no timed run of a fresh checkout pays for it."""
     subprocess.run([sys.executable, "-m", "compileall", "-q", str(tree.root / "cgamesh"), str(tree.root / "cli")],
                    check=True, stdout=subprocess.DEVNULL)
+
+
+def run_tool(name: str, main) -> None:
+    """Run a tool's ``main()`` as a command: exit with its status; a TreeError or an interrupt
+    is one line on stderr (exit 2 and 130)."""
+    try:
+        sys.exit(main())
+    except TreeError as error:
+        print(f"{name}: error: {error}", file=sys.stderr)
+        sys.exit(2)
+    except KeyboardInterrupt:
+        print(f"{name}: interrupted", file=sys.stderr)
+        sys.exit(130)
