@@ -148,10 +148,9 @@ def mesh_rings(rings: RingRows, layout: SurfaceRows, surfaces: CircleSurfaces, a
             except CgameshError as error:
                 errors[int(s)] = error
                 keep[rows] = False
-    ring_local = layout.local
+    ring_local, kept = layout.local, layout
     if not keep.all():
-        rings, ring_local = rings.take(keep), ring_local[keep]
-    kept = layout.kept(keep) if not keep.all() else layout
+        rings, ring_local, kept = rings.take(keep), ring_local[keep], layout.kept(keep)
     if not len(rings):  # every surface refused
         empty = np.zeros((0, 3))
         return CircleMeshes(surfaces.names, empty, empty, np.zeros((0, 2)), None, np.zeros((0, 3), np.int32),
@@ -159,9 +158,7 @@ def mesh_rings(rings: RingRows, layout: SurfaceRows, surfaces: CircleSurfaces, a
                             np.zeros((len(kept.count), 2)), kept.surface, ring_local, around + 1, surfaces.closed,
                             np.zeros(len(kept.count), dtype=bool), errors, {})
     grid = _Grid(rings, kept, surfaces, around, tangents)
-    meshed = ~grid.missing & (kept.count > 0)
-    for s in errors:
-        meshed[s] = False
+    meshed = ~grid.missing & (kept.count > 0)  # a refused surface has no rings left
     return CircleMeshes(surfaces.names, grid.positions, grid.normals, grid.uvs, grid.tangents, grid.faces,
                         grid.vertex_first, grid.face_first, grid.uv_lengths, kept.surface, ring_local, around + 1,
                         surfaces.closed, meshed, errors, grid.caps)
@@ -205,8 +202,7 @@ class _Grid:
         positions = normal_field.expand(placement, circle_basis)
         del placement
         normals, smallest, near_zero = normal_field.unit_normals(field.raw, theta, field.speed, NEAR_ZERO_FRACTION)
-        signs = continuous_signs(field, smallest, theta, rings, layout, surfaces.ends, u, surfaces.resample,
-                                 np.arange(len(layout.count)))
+        signs = continuous_signs(field, smallest, theta, rings, layout, surfaces.ends, u, surfaces.resample)
         self.missing |= signs.missing
         signs = signs.flipped(outward_flips(field, signs, rings, layout, positions, normals), surface)
         self.caps = {}
@@ -244,19 +240,15 @@ class _Grid:
         # Next to a fold or a pinch point the vertex normals of one triangle may differ widely,
         # and between rings turned far apart the chord need not follow d/dt: such triangles are
         # wound by their own geometry.
-        turning = np.zeros(len(layout.surface), dtype=bool)
-        turning[signs.examined] = True
+        turning = signs.examined_rows
         strip = ((turning[:-1] | turning[1:] | turned_pairs(signs.agreement)) & layout.within)[layout.within]
         if np.any(strip):
             orient_by_geometry(faces, self.positions, self.normals, np.repeat(strip, 2 * around), in_place=True)
         if near_zero[0].size:
-            count = len(faces)
-            faces, kept_faces = drop_zero_area(self.positions, faces, near_zero[0] * columns + near_zero[1],
-                                               np.arange(count))
-            if len(kept_faces) < count:
-                gone = np.setdiff1d(np.arange(count), kept_faces)
-                face_counts = face_counts - np.bincount(
-                    np.searchsorted(np.cumsum(face_counts), gone, side="right"), minlength=len(face_counts))
+            faces, gone = drop_zero_area(self.positions, faces, near_zero[0] * columns + near_zero[1], removed=True)
+            # each removed triangle's surface, from the surfaces' triangle counts
+            face_counts = face_counts - np.bincount(np.searchsorted(np.cumsum(face_counts), gone, side="right"),
+                                                    minlength=len(face_counts))
         self.faces = faces
         self.tangents = None if tangents is None else tangents.reshape(-1, 4)
         self.vertex_first = np.concatenate([layout.first, [len(layout.surface)]]) * columns
@@ -270,8 +262,7 @@ class _Grid:
 def _apply_signs(normals: np.ndarray, signs: RingSigns) -> None:
     """normals (R, M, 3) *= the signs, touching only rings with a negative sign."""
     flipped = signs.ring < 0.0
-    examined = np.zeros(len(normals), dtype=bool)
-    examined[signs.examined] = True
+    examined = signs.examined_rows
     if flipped.all() and not examined.any():  # the whole field turned outward
         np.negative(normals, out=normals)
     else:
@@ -296,8 +287,7 @@ def _faces(signs: RingSigns, layout: SurfaceRows, columns: int) -> np.ndarray:
     row = np.empty((columns - 1, 2, 3), dtype=np.int32)
     row[:, 0, 0], row[:, 0, 1], row[:, 0, 2] = j, j + 1, j + columns
     row[:, 1, 0], row[:, 1, 1], row[:, 1, 2] = j + 1, j + columns + 1, j + columns
-    examined = np.zeros(len(signs.ring), dtype=bool)
-    examined[signs.examined] = True
+    examined = signs.examined_rows
     by_vertex = np.flatnonzero(examined[pair] | examined[pair + 1])
     uniform = not by_vertex.size and (np.all(signs.ring > 0.0) or np.all(signs.ring < 0.0))
     flipped = None
@@ -403,10 +393,10 @@ def orient_by_geometry(faces: np.ndarray, positions: np.ndarray, normals: np.nda
     return faces
 
 
-def drop_zero_area(positions: np.ndarray, faces: np.ndarray, suspects: np.ndarray,
-                   *alongside: np.ndarray):
-    """Remove triangles of zero area among those touching the suspect vertices (indices), and
-    the same rows of the per-triangle arrays ``alongside`` (returned after the faces, if any)."""
+def drop_zero_area(positions: np.ndarray, faces: np.ndarray, suspects: np.ndarray, removed: bool = False):
+    """Remove triangles of zero area among those touching the suspect vertices (indices); with
+    ``removed``, also return the indices (into ``faces``) of the triangles removed."""
+    gone = np.empty(0, np.intp)
     if suspects.size:
         suspect = np.zeros(len(positions), dtype=bool)
         suspect[suspects] = True
@@ -418,8 +408,7 @@ def drop_zero_area(positions: np.ndarray, faces: np.ndarray, suspects: np.ndarra
             longest = np.maximum(np.einsum("ti,ti->t", edge_a, edge_a), np.einsum("ti,ti->t", edge_b, edge_b))
             gone = candidates[area2 <= 1e-12 * longest]
             faces = np.delete(faces, gone, axis=0)
-            alongside = tuple(np.delete(values, gone, axis=0) for values in alongside)
-    return (faces, *alongside) if alongside else faces
+    return (faces, gone) if removed else faces
 
 
 def read_rings(surface: EvolvedSurface, t: np.ndarray) -> CircleRings:

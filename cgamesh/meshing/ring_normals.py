@@ -149,6 +149,11 @@ class RingSigns:
         row_of[self.examined] = np.arange(len(self.examined))
         return row_of
 
+    @property
+    def examined_rows(self) -> np.ndarray:
+        """(R,) bool: the examined rings."""
+        return self.row_of >= 0
+
     def flipped(self, flip: np.ndarray, surface: np.ndarray) -> "RingSigns":
         """These signs with surfaces ``flip`` (S,) bool turned over (``surface`` (R,): each row's)."""
         factor = np.where(flip[surface], -1.0, 1.0)
@@ -157,11 +162,9 @@ class RingSigns:
 
 
 def continuous_signs(field: RingNormals, smallest: np.ndarray, theta: np.ndarray, rings: RingRows,
-                     layout: SurfaceRows, ends: np.ndarray, u: np.ndarray, resample: Resample,
-                     surface_ids: np.ndarray) -> RingSigns:
+                     layout: SurfaceRows, ends: np.ndarray, u: np.ndarray, resample: Resample) -> RingSigns:
     """The signs making the field continuous over each surface's grid (module doc). ``ends`` (S,)
-    each surface's last parameter; ``surface_ids`` (S,) the surfaces' indices as ``resample``
-    knows them."""
+    each surface's last parameter; ``resample`` reads circles of surfaces by their index."""
     columns = len(theta)
     surface, within = layout.surface, layout.within
     suspicious, agreement = fold_screen(field, smallest, theta)
@@ -180,7 +183,7 @@ def continuous_signs(field: RingNormals, smallest: np.ndarray, theta: np.ndarray
             after_t = np.minimum(rings.t[ring] + STATIONARY_OFFSET, end)
             count = len(ring)
             both = np.concatenate([surface[ring], surface[ring]])
-            read, exists = resample(surface_ids[both], np.concatenate([before_t, after_t]))
+            read, exists = resample(both, np.concatenate([before_t, after_t]))
             missing[both[~exists]] = True
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
                 nearby = nearby_normals(read, np.concatenate([u[ring], u[ring]]))

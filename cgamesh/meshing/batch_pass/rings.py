@@ -16,7 +16,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cgamesh.errors import DegenerateGeometryError
 from cgamesh.geometry.motors import Motions
 from cgamesh.geometry.surface import SCAN_SAMPLES_PER_SEGMENT
 from cgamesh.meshing.batch_pass.circle_rows import CircleRows
@@ -26,7 +25,7 @@ from cgamesh.meshing.ring_rows import RingRows, SurfaceRows
 
 @dataclass(frozen=True)
 class TubeArrays:
-    """The tubes of every chain, chain after chain (those marked ``fallback`` are not to be used).
+    """The tubes of every chain, chain after chain (those with an error are not to be used).
 
     positions, normals (V, 3); uvs (V, 2); faces (F, 3) int32, indices local to each chain, in
     rows of 2 around triangles, one row per pair of consecutive rings (fewer where a triangle
@@ -93,9 +92,8 @@ def mesh_chains(motions: Motions, origin: np.ndarray, scale: np.ndarray, around:
     del rings
     # a normal spline its bound does not certify is scanned as a motor surface's check scans it
     errors = motions.lost_planes(names, SCAN_SAMPLES_PER_SEGMENT) if not motions.certified.all() else {}
-    for c in np.flatnonzero(~meshes.meshed):  # a motor circle is never a line: rings that all coincide
-        errors.setdefault(int(c), meshes.errors.get(int(c)) or DegenerateGeometryError(
-            f"surface '{names[c]}': the tube could not be meshed"))
+    for c, error in meshes.errors.items():  # a motor circle is never a line: rings that all coincide
+        errors.setdefault(c, error)
     dropped = np.bincount(meshes.ring_surface, minlength=chains) != along
     face_counts = np.diff(meshes.face_first)
     faces = meshes.faces
