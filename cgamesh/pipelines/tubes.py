@@ -23,6 +23,7 @@ from cgamesh.geometry.motor_surface import MotorSurface
 from cgamesh.geometry.motors import MotionSpline
 from cgamesh.inputs.centerlines import Centerlines
 from cgamesh.inputs.scene_specs import Location
+from cgamesh.meshing.batch_pass.chains import chain_motions
 from cgamesh.meshing.mesh import SurfaceMesh
 from cgamesh.meshing.node_normals import envelope_normals
 from cgamesh.pipelines.chains import Chain
@@ -92,16 +93,10 @@ def tube_spec(chain: Chain, index: int, points, radii, soma, tangents, segment_o
 
 def tube_surface(name: str, centre: np.ndarray, normal: np.ndarray, radius: np.ndarray) -> MotorSurface:
     """The motor surface through the circles of centres (n, 3), normals (n, 3, any length) and radii
-    (n,) in file units: the splined similarity motion of a Catmull-Rom curve (aligned, open) in
-    the circles' working frame, as ``construction.build_motor_surface`` builds a scene file's
-    motor surface of those circle controls."""
-    frame = LocalFrame.enclosing(centre, radius)
-    # each normal over its own length as np.linalg.norm of a 3-vector takes it (a dot product):
-    # a matmul of 1 x 3 rows rounds as that does, a row-wise norm does not
-    unit = normal / np.sqrt(np.matmul(normal[:, None, :], normal[:, :, None])[:, 0])
-    path = MotionSpline.through(frame.to_local(centre), unit, radius / frame.scale, "catmull_rom", False, 0.0, 0.0,
-                                0.0, None, True)
-    return MotorSurface(name, path, frame)
+    (n,) in file units: a chain's motion as the chunks of chains spline it
+    (``batch_pass.chains.chain_motions``), as a surface of its own."""
+    motions, origin, scale = chain_motions(centre, normal, radius, np.array([0]), np.array([len(centre)]))
+    return MotorSurface(name, MotionSpline(motions), LocalFrame(origin=origin[0], scale=float(scale[0])))
 
 
 def finish_tube(tube: TubeSpec, mesh: SurfaceMesh, chain: Chain, index: int, scalar, options: TubeOptions,

@@ -152,25 +152,33 @@ def tube_pieces(chains, points, radii, soma, scalar, tangents, segment_of, optio
     return [line for _, line in sorted(skipped)]
 
 
-def _mesh_chunk(members, first, count, p, t, r, options, stem: str) -> TubeArrays:
-    """The batched meshes of the chains ``members`` (indices into the per-chain arrays)."""
-    c = count[members]
-    local_first = np.concatenate([[0], np.cumsum(c)[:-1]]).astype(np.int64)
-    index = np.repeat(first[members] - local_first, c) + np.arange(int(c.sum()))
-    centre, tangent, radius = p[index], t[index], r[index]
-    chain = np.repeat(np.arange(len(members)), c)
-    # LocalFrame.enclosing per chain
-    low = np.minimum.reduceat(centre, local_first, axis=0)
-    high = np.maximum.reduceat(centre, local_first, axis=0)
+def chain_motions(centre: np.ndarray, tangent: np.ndarray, radius: np.ndarray, first: np.ndarray,
+                  count: np.ndarray) -> tuple[Motions, np.ndarray, np.ndarray]:
+    """The splined motions of chains through their node circles (centres, ring normals of any
+    length (N, 3), radii (N,), file units; chain c's nodes are first[c] .. first[c] + count[c] - 1)
+    in each chain's working frame, with the frames' origins (C, 3) and scales (C,): each frame
+    ``LocalFrame.enclosing`` of its chain's centres and radii, each normal over its own length."""
+    chain = np.repeat(np.arange(len(count)), count)
+    low = np.minimum.reduceat(centre, first, axis=0)
+    high = np.maximum.reduceat(centre, first, axis=0)
     origin = 0.5 * (low + high)
     reach = np.linalg.norm(centre - origin[chain], axis=1) + radius
-    scale = np.maximum.reduceat(reach, local_first)
+    scale = np.maximum.reduceat(reach, first)
     scale = np.where(scale > 0.0, scale, 1.0)
     local_centre = (centre - origin[chain]) / scale[chain][:, None]
     # each control's normal / np.linalg.norm(normal) of its 3-vector (a dot product): matmul
     # of the 1 x 3 rows rounds as that does, the row-wise norm does not
     normal = tangent / np.sqrt(np.matmul(tangent[:, None, :], tangent[:, :, None])[:, 0])
-    motions = Motions.through(local_centre, normal, radius / scale[chain], MotionNodes(local_first, c), "catmull_rom")
+    motions = Motions.through(local_centre, normal, radius / scale[chain], MotionNodes(first, count), "catmull_rom")
+    return motions, origin, scale
+
+
+def _mesh_chunk(members, first, count, p, t, r, options, stem: str) -> TubeArrays:
+    """The batched meshes of the chains ``members`` (indices into the per-chain arrays)."""
+    c = count[members]
+    local_first = np.concatenate([[0], np.cumsum(c)[:-1]]).astype(np.int64)
+    index = np.repeat(first[members] - local_first, c) + np.arange(int(c.sum()))
+    motions, origin, scale = chain_motions(p[index], t[index], r[index], local_first, c)
     return mesh_chains(motions, origin, scale, options.around, options.subdivide,
                        [f"{stem}_{int(index)}" for index in members])
 
